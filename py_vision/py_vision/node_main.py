@@ -1,0 +1,79 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The `main()` every py_vision executable shares: start-up, spin and a quiet, clean exit.
+
+Bad configuration ends the process with one error line and exit status 1. Ctrl-C (SIGINT) and
+SIGTERM end it with status 0 and no traceback, also while it is still starting up.
+"""
+
+import signal
+import sys
+
+from py_vision import dds
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.logging import get_logger
+
+
+class ConfigError(Exception):
+    """A parameter or a device the user gave cannot be used; the message says which and why."""
+
+
+def _exit_quietly(signum, frame):
+    raise SystemExit(0)
+
+
+def run(node_class, args=None):
+    """Build node_class() and spin it until Ctrl-C, SIGTERM or rclpy shutdown; return the status.
+
+    node_class must raise ConfigError for problems the user has to fix. Nodes with a
+    ``close()`` method get it called before the node is destroyed (threads, devices, sockets).
+    """
+    # Until rclpy installs its own handlers, a signal simply ends the process.
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, _exit_quietly)
+    dds.use_packaged_profile()
+    rclpy.init(args=args)
+    node = None
+    status = 0
+    try:
+        node = node_class()
+        rclpy.spin(node)
+    except ConfigError as error:
+        get_logger(node_class.NODE_NAME).error(str(error))
+        status = 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except Exception:
+        if rclpy.ok():
+            raise
+        # rclpy was shut down by a signal while the node was being built.
+    finally:
+        if node is not None:
+            close = getattr(node, 'close', None)
+            if close is not None:
+                close()
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return status
+
+
+def main_for(node_class):
+    """Return a console_scripts entry point for node_class."""
+    def main(args=None):
+        sys.exit(run(node_class, args))
+    main.__doc__ = 'Run the %s node.' % node_class.NODE_NAME
+    return main
+

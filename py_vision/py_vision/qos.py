@@ -1,0 +1,94 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Quality of service for image topics, built from the nodes' string parameters."""
+
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+try:
+    from rclpy.event_handler import SubscriptionEventCallbacks
+except ImportError:  # Humble
+    from rclpy.qos_event import SubscriptionEventCallbacks
+
+RELIABILITY = {
+    'reliable': ReliabilityPolicy.RELIABLE,
+    'best_effort': ReliabilityPolicy.BEST_EFFORT,
+}
+
+
+def publisher_qos(reliability='reliable', depth=10):
+    """Return the publisher QoS for a reliability name from RELIABILITY and a queue depth."""
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
+                      reliability=RELIABILITY[reliability])
+
+
+def subscriber_qos(depth=5):
+    """Return a subscription QoS that matches reliable and best-effort publishers alike.
+
+    A best-effort subscription matches both kinds of publisher; `ImageSubscription` upgrades
+    it to reliable when every publisher on the topic is reliable, so that nothing a reliable
+    publisher sends is lost.
+    """
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
+                      reliability=ReliabilityPolicy.BEST_EFFORT)
+
+
+class ImageSubscription:
+    """A subscription that hears every publisher on its topic with the best reliability it can.
+
+    It is reliable while all publishers are reliable (so nothing they send is lost) and
+    best-effort as soon as one best-effort publisher appears (a reliable subscription cannot
+    match it). This is what Jazzy's BEST_AVAILABLE does at creation time, kept up to date as
+    publishers come and go, and available on Humble too.
+    """
+
+    def __init__(self, node, msg_type, topic, callback, depth=5, check_period=0.5):
+        self._node = node
+        self._args = (msg_type, topic, callback)
+        self._depth = depth
+        self.reliability = ReliabilityPolicy.RELIABLE
+        self.subscription = self._create()
+        self._recheck()
+        self._timer = node.create_timer(check_period, self._recheck)
+
+    @property
+    def topic_name(self):
+        """The fully resolved topic name."""
+        return self.subscription.topic_name
+
+    def _create(self):
+        msg_type, topic, callback = self._args
+        events = SubscriptionEventCallbacks(incompatible_qos=self._on_incompatible)
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=self._depth,
+                         reliability=self.reliability)
+        return self._node.create_subscription(msg_type, topic, callback, qos,
+                                              event_callbacks=events)
+
+    def _on_incompatible(self, event):
+        # Handling the event replaces rclpy's default warning. Resubscribing from inside the
+        # subscription's own callback is not safe; the next check (within check_period) does it.
+        pass
+
+    def _recheck(self):
+        publishers = self._node.get_publishers_info_by_topic(self.topic_name)
+        wanted = ReliabilityPolicy.RELIABLE
+        if any(p.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT for p in publishers):
+            wanted = ReliabilityPolicy.BEST_EFFORT
+        if wanted == self.reliability:
+            return
+        self.reliability = wanted
+        self._node.destroy_subscription(self.subscription)
+        self.subscription = self._create()
+        self._node.get_logger().info('subscribed to %s as %s to match its publishers' % (
+            self.topic_name, wanted.name.lower()))

@@ -1,0 +1,86 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Received-stream statistics: rate, latency percentiles, gaps and lost frames."""
+
+import collections
+import time
+
+
+def percentile(sorted_values, fraction):
+    """Return the nearest-rank percentile of an already sorted, non-empty list."""
+    rank = min(len(sorted_values) - 1, max(0, int(round(fraction * len(sorted_values))) - 1))
+    return sorted_values[rank]
+
+
+class StreamStats:
+    """Counts what a subscriber receives; `snapshot()` summarises the recent window."""
+
+    def __init__(self, window_s=5.0, clock=time.monotonic):
+        self.window_s = window_s
+        self._clock = clock
+        self._recent = collections.deque()  # (arrival time, latency in s)
+        self.frames = 0
+        self.lost = 0
+        self.errors = 0
+        self.longest_gap_s = 0.0
+        self.width = self.height = 0
+        self.encoding = ''
+        self._last_arrival = None
+        self._last_index = None
+
+    def add(self, latency_s, width, height, encoding, index=None):
+        """Record one received frame; index is its source frame number when readable."""
+        now = self._clock()
+        if self._last_arrival is not None:
+            self.longest_gap_s = max(self.longest_gap_s, now - self._last_arrival)
+        self._last_arrival = now
+        self._recent.append((now, latency_s))
+        self.frames += 1
+        self.width, self.height, self.encoding = width, height, encoding
+        if index is not None:
+            if self._last_index is not None and index > self._last_index + 1:
+                self.lost += index - self._last_index - 1
+            self._last_index = index
+
+    def add_error(self):
+        """Record one message that could not be used."""
+        self.errors += 1
+
+    def snapshot(self):
+        """Return a JSON-able summary: totals, and rate and latency over the recent window."""
+        now = self._clock()
+        while self._recent and self._recent[0][0] < now - self.window_s:
+            self._recent.popleft()
+        latencies = sorted(latency for _, latency in self._recent)
+        fps = 0.0
+        if len(self._recent) > 1:
+            span = now - self._recent[0][0]
+            fps = (len(self._recent) - 1) / span if span > 0 else 0.0
+        return {
+            'frames': self.frames,
+            'lost': self.lost,
+            'errors': self.errors,
+            'fps': round(fps, 2),
+            'latency_ms_p50': round(percentile(latencies, 0.5) * 1e3, 2) if latencies else None,
+            'latency_ms_p99': round(percentile(latencies, 0.99) * 1e3, 2) if latencies else None,
+            'longest_gap_s': round(self.longest_gap_s, 3),
+            'width': self.width,
+            'height': self.height,
+            'encoding': self.encoding,
+        }
+
+    def reset_gap(self):
+        """Start measuring the longest gap afresh (after it has been reported)."""
+        self.longest_gap_s = 0.0
