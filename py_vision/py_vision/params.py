@@ -50,6 +50,7 @@ class Parameters:
     def __init__(self, node):
         self._node = node
         self._specs = {}
+        self._declaring = False
         node.add_on_set_parameters_callback(self._on_set)
 
     def declare(self, name, default, description, check=None, accepted='', on_change=None):
@@ -65,14 +66,19 @@ class Parameters:
         descriptor = ParameterDescriptor(
             description=description, read_only=read_only, dynamic_typing=True,
             additional_constraints=accepted)
-        value = self._node.declare_parameter(name, default, descriptor).value
+        # rclpy runs the set-callbacks for declarations too; start-up values are checked here.
+        self._declaring = True
+        try:
+            value = self._node.declare_parameter(name, default, descriptor).value
+        finally:
+            self._declaring = False
         return coerce(name, value, kind, check, accepted)
 
     def _on_set(self, parameters):
         # Read-only parameters are refused by rclpy itself; this checks the writable ones and
         # applies them only when all of them are acceptable.
         changes = []
-        for parameter in parameters:
+        for parameter in parameters if not self._declaring else ():
             spec = self._specs.get(parameter.name)
             if spec is None or spec[3] is None:
                 continue

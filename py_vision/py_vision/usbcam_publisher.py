@@ -118,7 +118,12 @@ class USBImagePublisher(Node):
                     failed_reads = 0
                 continue
             failed_reads = 0
-            self._publish(frame, self._capture_stamp())
+            try:
+                self._publish(frame, self._capture_stamp())
+            except Exception:
+                if self.context.ok():
+                    raise
+                return  # Ctrl-C or SIGTERM shut rclpy down under this thread.
 
     def _capture_stamp(self):
         """Return the capture time of the frame just read, as a ROS time."""
