@@ -13,3 +13,24 @@
 # limitations under the License.
 
 """py_vision: USB camera streaming, display and a pure-Python cv_bridge for ROS 2."""
+
+import os
+import signal
+import sys
+import threading
+
+EXECUTABLES = ('usbcam_publisher', 'usbcam_subscriber', 'cv_bridge_test')
+
+
+def _exit_quietly(signum, frame):
+    raise SystemExit(0)
+
+
+# Importing rclpy, numpy and OpenCV takes a second or more on a board. When this package is
+# imported by one of its own executables, Ctrl-C or SIGTERM during that time ends the process
+# quietly instead of printing a KeyboardInterrupt traceback; node_main.run() then hands the
+# signals to rclpy. Library users importing py_vision keep their own signal handling.
+if (os.path.basename(sys.argv[0] if sys.argv else '') in EXECUTABLES
+        and threading.current_thread() is threading.main_thread()):
+    for _signal in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(_signal, _exit_quietly)

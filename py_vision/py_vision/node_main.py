@@ -18,7 +18,6 @@ Bad configuration ends the process with one error line and exit status 1. Ctrl-C
 SIGTERM end it with status 0 and no traceback, also while it is still starting up.
 """
 
-import signal
 import sys
 
 from py_vision import dds
@@ -31,19 +30,14 @@ class ConfigError(Exception):
     """A parameter or a device the user gave cannot be used; the message says which and why."""
 
 
-def _exit_quietly(signum, frame):
-    raise SystemExit(0)
-
-
 def run(node_class, args=None):
     """Build node_class() and spin it until Ctrl-C, SIGTERM or rclpy shutdown; return the status.
 
     node_class must raise ConfigError for problems the user has to fix. Nodes with a
     ``close()`` method get it called before the node is destroyed (threads, devices, sockets).
     """
-    # Until rclpy installs its own handlers, a signal simply ends the process.
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, _exit_quietly)
+    # Until rclpy.init() installs its handlers, a signal ends the process quietly (see
+    # py_vision/__init__.py); from then on it shuts rclpy down and spin() returns.
     dds.use_packaged_profile()
     rclpy.init(args=args)
     node = None

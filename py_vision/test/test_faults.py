@@ -220,7 +220,9 @@ def test_runtime_parameter_changes_are_applied_or_refused_with_a_reason(launch, 
 
 @pytest.mark.parametrize('executable', ['usbcam_publisher', 'usbcam_subscriber',
                                         'cv_bridge_test'])
-@pytest.mark.parametrize('delay', [0.05, 0.4, 1.0])
+# From the moment the interpreter imports py_vision (about 0.2 s after exec): during the
+# imports of rclpy, numpy and OpenCV, rclpy.init(), node creation and opening the device.
+@pytest.mark.parametrize('delay', [0.4, 0.8, 1.5])
 def test_signal_during_start_up_exits_cleanly(launch, executable, delay):
     params = {'video_device': 'synthetic'} if executable == 'usbcam_publisher' else {}
     if executable == 'usbcam_subscriber':
