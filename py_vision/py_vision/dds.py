@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Use the Fast DDS profile shipped with py_vision unless the user chose their own.
+"""
+Use the Fast DDS profile shipped with py_vision unless the user chose their own.
 
 Fast DDS' default shared-memory segment (0.5 MB) is smaller than one VGA frame, so images
 fall back to fragmented UDP and best-effort subscribers lose many of them. The packaged
@@ -40,7 +41,8 @@ def packaged_profile():
 
 
 def use_packaged_profile(environ=os.environ):
-    """Point Fast DDS at the packaged profile; return the path used, or None if left alone.
+    """
+    Point Fast DDS at the packaged profile; return the path used, or None if left alone.
 
     Left alone: another RMW is selected, the user set a profile file, or Fast DDS would
     load DEFAULT_FASTRTPS_PROFILES.xml from the working directory.

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The `main()` every py_vision executable shares: start-up, spin and a quiet, clean exit.
+"""
+The `main()` every py_vision executable shares: start-up, spin and a quiet, clean exit.
 
 Bad configuration ends the process with one error line and exit status 1. Ctrl-C (SIGINT) and
 SIGTERM end it with status 0 and no traceback, also while it is still starting up.
@@ -31,7 +32,8 @@ class ConfigError(Exception):
 
 
 def run(node_class, args=None):
-    """Build node_class() and spin it until Ctrl-C, SIGTERM or rclpy shutdown; return the status.
+    """
+    Build node_class() and spin it until Ctrl-C, SIGTERM or rclpy shutdown; return the status.
 
     node_class must raise ConfigError for problems the user has to fix. Nodes with a
     ``close()`` method get it called before the node is destroyed (threads, devices, sockets).
@@ -70,4 +72,3 @@ def main_for(node_class):
         sys.exit(run(node_class, args))
     main.__doc__ = 'Run the %s node.' % node_class.NODE_NAME
     return main
-

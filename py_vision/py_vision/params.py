@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Parameter declaration and checking shared by the nodes.
+"""
+Parameter declaration and checking shared by the nodes.
 
 Each node declares its parameters in one place through `declare()`, which attaches a
 description and accepts the types users actually type on the command line: `framerate:=30`
@@ -54,7 +55,8 @@ class Parameters:
         node.add_on_set_parameters_callback(self._on_set)
 
     def declare(self, name, default, description, check=None, accepted='', on_change=None):
-        """Declare a parameter; return its checked value (ConfigError if it is unusable).
+        """
+        Declare a parameter; return its checked value (ConfigError if it is unusable).
 
         A parameter with an on_change(value) callback can be set at run time (`ros2 param
         set`); it is checked like at start-up and the callback applies it. The others are

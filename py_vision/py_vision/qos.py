@@ -34,7 +34,8 @@ def publisher_qos(reliability='reliable', depth=10):
 
 
 def subscriber_qos(depth=5):
-    """Return a subscription QoS that matches reliable and best-effort publishers alike.
+    """
+    Return a subscription QoS that matches reliable and best-effort publishers alike.
 
     A best-effort subscription matches both kinds of publisher; `ImageSubscription` upgrades
     it to reliable when every publisher on the topic is reliable, so that nothing a reliable
@@ -45,7 +46,8 @@ def subscriber_qos(depth=5):
 
 
 class ImageSubscription:
-    """A subscription that hears every publisher on its topic with the best reliability it can.
+    """
+    A subscription that hears every publisher on its topic with the best reliability it can.
 
     It is reliable while all publishers are reliable (so nothing they send is lost) and
     best-effort as soon as one best-effort publisher appears (a reliable subscription cannot
@@ -64,7 +66,7 @@ class ImageSubscription:
 
     @property
     def topic_name(self):
-        """The fully resolved topic name."""
+        """Return the fully resolved topic name."""
         return self.subscription.topic_name
 
     def _create(self):

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""usbcam_publisher: camera frames to sensor_msgs/Image (bgr8) on usb_camera/image.
+"""
+usbcam_publisher: camera frames to sensor_msgs/Image (bgr8) on usb_camera/image.
 
 The ROS 2 port of the tutorial's publisher, made robust: frames are read on a capture thread
 (a camera paces itself, so there is no timer to drift against it), stamped with their capture
@@ -28,6 +29,7 @@ from py_vision.frame_source import open_capture, SourceError
 from py_vision.node_main import ConfigError, main_for
 from py_vision.params import Parameters
 from py_vision.qos import publisher_qos, RELIABILITY
+from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.time import Time
 from sensor_msgs.msg import Image
@@ -169,7 +171,9 @@ class USBImagePublisher(Node):
         if self.cap is not None:
             self.cap.release()
             self.cap = None
-        self.get_logger().info('camera released after %d frames' % self.frames_published)
+        # rclpy may be shut down already (Ctrl-C): a logger that does not publish to /rosout.
+        get_logger(self.NODE_NAME + '.camera').info(
+            'camera released after %d frames' % self.frames_published)
 
 
 main = main_for(USBImagePublisher)

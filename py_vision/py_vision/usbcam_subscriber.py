@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""usbcam_subscriber: receive usb_camera/image, convert it with the bridge and show it.
+"""
+usbcam_subscriber: receive usb_camera/image, convert it with the bridge and show it.
 
 The ROS 2 port of the tutorial's subscriber. It hears reliable and best-effort publishers,
 shows any encoding the bridge knows (in an OpenCV window or a browser), logs the received
@@ -142,8 +143,9 @@ class VideoSubscriber(Node):
         new_errors = self.stats.errors - self._errors_reported
         if new_errors > 0:
             self._errors_reported = self.stats.errors
-            self.get_logger().error('%d malformed image(s) dropped in the last %.3g s; last: %s' % (
-                new_errors, self.stats_period, self._last_error))
+            self.get_logger().error(
+                '%d malformed image(s) dropped in the last %.3g s; last: %s' % (
+                    new_errors, self.stats_period, self._last_error))
 
     def _update_web_stats(self):
         stats = self.stats.snapshot()

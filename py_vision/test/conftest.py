@@ -34,7 +34,7 @@ sys.path.insert(0, str(ros_harness.SITE_PACKAGES))
 
 @pytest.fixture
 def domain_id():
-    """A ROS_DOMAIN_ID no other running test uses."""
+    """Reserve a ROS_DOMAIN_ID that no other running test uses."""
     reserved = ros_harness.DomainId()
     yield reserved.value
     reserved.release()
@@ -42,7 +42,7 @@ def domain_id():
 
 @pytest.fixture
 def ros_env(domain_id):
-    """Environment for node processes: the installed package, this test's domain, local host."""
+    """Return the environment for node processes: installed package, own domain, local host."""
     env = ros_harness.installed_env()
     env.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
                PYTHONUNBUFFERED='1', RCUTILS_COLORIZED_OUTPUT='0')
@@ -52,7 +52,8 @@ def ros_env(domain_id):
 
 @pytest.fixture
 def launch(ros_env):
-    """Start installed executables: launch('usbcam_publisher', params={...}, remaps={...}).
+    """
+    Start installed executables, as in launch('usbcam_publisher', params={}, remaps={}).
 
     Every process is stopped at the end of the test, whatever happened.
     """
@@ -70,7 +71,7 @@ def launch(ros_env):
 
 @pytest.fixture
 def peer(domain_id):
-    """An in-process rclpy node on this test's domain (subscribe, publish, spin in a thread)."""
+    """Provide an in-process rclpy node on this test's domain, spinning in a thread."""
     node = ros_harness.RosPeer(domain_id)
     yield node
     node.close()

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Subscribe to usb_camera/image in a separate process and check each frame's pixels.
+"""
+Subscribe to usb_camera/image in a separate process and check each frame's pixels.
 
 Run by tests where an in-process peer cannot go (another network namespace). Prints one JSON
 line: {"frames": N, "intact": K, "indexes": [...]} after `count` frames, then exits 0.

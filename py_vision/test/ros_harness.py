@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Run the colcon-installed py_vision executables and real ROS 2 peers from tests.
+"""
+Run the colcon-installed py_vision executables and real ROS 2 peers from tests.
 
 Every test gets its own ROS_DOMAIN_ID (reserved with a lock file, so concurrent pytest runs on
 one machine never share one) and discovery stays on the local host. Processes a test starts are

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Copyright and license headers, checked without ament_copyright (which is not on PyPI).
+"""
+Copyright and license headers, checked without ament_copyright (which is not on PyPI).
 
 ament_copyright accepts a file when it starts (after an optional shebang) with a
 'Copyright <year> <holder>' line followed by the license's standard notice. This test applies

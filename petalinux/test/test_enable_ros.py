@@ -1,0 +1,516 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+petalinux/enable_ros.py on PetaLinux 2023.2 project skeletons of the three boards.
+
+The skeletons (fixtures/<board>/) hold what petalinux-create and the Avnet board scripts leave:
+the project settings, a long Kconfig rootfs_config with its menu banners, 'is not set' lines
+and user packages block, and a user-rootfsconfig with the PetaLinux note and the board's own
+packages. Each test derives a starting state from them, runs the tool as a user would, and
+checks the result with petalinux_model (what PetaLinux and Kconfig read), line by line.
+"""
+
+import difflib
+import importlib.util
+import os
+from pathlib import Path
+import re
+import shutil
+import subprocess
+import sys
+
+import petalinux_model as model
+import pytest
+
+HERE = Path(__file__).resolve().parent
+TOOL = HERE.parent / 'enable_ros.py'
+FIXTURES = HERE / 'fixtures'
+USER = Path('project-spec/meta-user/conf/user-rootfsconfig')
+ROOTFS = Path('project-spec/configs/rootfs_config')
+CONFIG = Path('project-spec/configs/config')
+
+# The issue's package list, which every board's fragments hold today.
+ROS = ['packagegroup-petalinux-ros', 'packagegroup-petalinux-ros-dev', 'cv-bridge',
+       'cv-bridge-dev', 'v4l2-camera', 'v4l2-camera-dev', 'turtlesim', 'turtlesim-dev']
+BOARDS = {'zub1cg': 'zub1cg-sbc-2023-2', 'u96v2': 'u96v2-sbc-2023-2',
+          'uz7ev': 'uz7ev-evcc-2023-2'}
+
+
+def load_tool():
+    spec = importlib.util.spec_from_file_location('enable_ros', TOOL)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+enable_ros = load_tool()
+
+
+def run_tool(*args):
+    """Run the tool as a user does; return the CompletedProcess (text output)."""
+    result = subprocess.run([sys.executable, str(TOOL)] + [str(a) for a in args],
+                            capture_output=True, text=True, timeout=30)
+    assert 'Traceback' not in result.stderr, result.stderr
+    return result
+
+
+# ---------------------------------------------------------------------------------------------
+# Starting states
+
+def block_entries(text, entries):
+    """Return rootfs_config text with entries {name: line} merged, sorted, into its block."""
+    lines = text.split('\n')
+    start = lines.index('# user packages ') + 2
+    end = start
+    while lines[end].startswith(('CONFIG_', '# CONFIG_')):
+        end += 1
+    block = lines[start:end] + list(entries.values())
+    block.sort(key=lambda line: re.search(r'CONFIG_([^= ]+)', line).group(1))
+    return '\n'.join(lines[:start] + block + lines[end:])
+
+
+def without_block(text):
+    """Return rootfs_config text without its user packages menu (banner and entries)."""
+    return re.sub(r'\n#\n# user packages \n#\n(?:(?:# )?CONFIG_[^\n]*\n)*', '', text)
+
+
+def make_project(tmp_path, board, state):
+    """Copy a board's skeleton and put it in a starting state; return the project dir."""
+    project = tmp_path / board
+    shutil.copytree(FIXTURES / board, project)
+    user = (project / USER).read_text()
+    rootfs = (project / ROOTFS).read_text()
+    if state == 'declared_not_set':
+        # Declared, and petalinux-config has run: the packagegroups are 'is not set', the
+        # bridge is on, the rest was never written.
+        user += ''.join('CONFIG_%s\n' % name for name in ROS)
+        rootfs = block_entries(rootfs, {
+            'packagegroup-petalinux-ros': '# CONFIG_packagegroup-petalinux-ros is not set',
+            'packagegroup-petalinux-ros-dev':
+                '# CONFIG_packagegroup-petalinux-ros-dev is not set',
+            'cv-bridge': 'CONFIG_cv-bridge=y', 'cv-bridge-dev': 'CONFIG_cv-bridge-dev=y'})
+    elif state == 'commented':
+        user += ''.join(('#CONFIG_%s\n', '# CONFIG_%s\n')[i % 2] % name
+                        for i, name in enumerate(ROS))
+    elif state == 'no_final_newline':
+        user = user.rstrip('\n')
+        rootfs = without_block(rootfs).rstrip('\n')
+    elif state == 'no_block':
+        rootfs = without_block(rootfs)
+    elif state == 'enabled':
+        user += ''.join('CONFIG_%s\n' % name for name in ROS)
+        rootfs = block_entries(rootfs, {name: 'CONFIG_%s=y' % name for name in ROS})
+    elif state == 'crlf':
+        user, rootfs = user.replace('\n', '\r\n'), rootfs.replace('\n', '\r\n')
+    elif state == 'messy':
+        user += ('# CONFIG_cv-bridge is not set\n'  # pasted from rootfs_config: not cv-bridge
+                 'CONFIG_cv-bridge\n'
+                 '#CONFIG_turtlesim\n'
+                 'CONFIG_cv-bridge\n'
+                 '  CONFIG_v4l2-camera  \n')
+        rootfs = block_entries(rootfs, {
+            'cv-bridge': 'CONFIG_cv-bridge=y',
+            'turtlesim': 'CONFIG_turtlesim=m',
+            'v4l2-camera': 'CONFIG_v4l2-camera=y ',
+            'turtlesim-dev': 'CONFIG_turtlesim-dev=y'})
+        rootfs += ('\n#\n# Appended by hand\n#\nCONFIG_cv-bridge=y\n'
+                   '# CONFIG_turtlesim-dev is not set\nCONFIG_v4l2-camera-dev=n\n')
+    else:
+        assert state == 'fresh'
+    (project / USER).write_bytes(user.encode())
+    (project / ROOTFS).write_bytes(rootfs.encode())
+    return project
+
+
+STATES = ['fresh', 'declared_not_set', 'commented', 'no_final_newline', 'no_block', 'enabled',
+          'crlf', 'messy']
+
+
+# ---------------------------------------------------------------------------------------------
+# What a correct result looks like
+
+def assert_enabled(project):
+    """Assert PetaLinux declares and Kconfig enables every ROS package exactly once."""
+    user = (project / USER).read_bytes()
+    rootfs = (project / ROOTFS).read_bytes()
+    declared = model.declarations(user)
+    values = model.assignments(rootfs)
+    installed = model.image_packages(rootfs)
+    for name in ROS:
+        assert declared.count(name) == 1, (name, declared)
+        assert values.get(name) == ['y'], (name, values.get(name))
+        assert installed.count(name) == 1, name
+    lines = model.kconfig_lines(user)
+    assert all('CONFIG_%s' % name in lines for name in ROS)
+
+
+def raw_lines(data):
+    return data.decode('utf-8', 'surrogateescape').splitlines(keepends=True)
+
+
+def ros_line(line):
+    """Return whether a line (with or without its end) is about one of the ROS packages."""
+    text = line.rstrip('\r\n')
+    match = re.search(r'CONFIG_([^= ]+)', text)
+    return bool(match) and match.group(1) in ROS
+
+
+def assert_only_ros_lines_changed(before, after):
+    """Assert the only differences are ROS lines and a newline given to a last line."""
+    old, new = raw_lines(before), raw_lines(after)
+    matcher = difflib.SequenceMatcher(a=old, b=new, autojunk=False)
+    for op, a0, a1, b0, b1 in matcher.get_opcodes():
+        if op == 'equal':
+            continue
+        removed, added = old[a0:a1], new[b0:b1]
+        if removed and not removed[-1].endswith('\n') and a1 == len(old):
+            # The old last line, which had no newline, may only have gained one.
+            assert added and added[0] == removed[-1] + added[0][len(removed[-1]):], added
+            assert added[0][len(removed[-1]):] in ('\n', '\r\n')
+            removed, added = removed[:-1], added[1:]
+        assert all(ros_line(line) for line in removed), removed
+        for line in added:
+            assert re.fullmatch(r'CONFIG_([^=\s]+)(=y)?\r?\n', line), line
+            assert ros_line(line), line
+
+
+def neighbours(lines, index):
+    """Return the nearest lines above and below lines[index] that are not ROS lines."""
+    above = next(line for line in reversed(lines[:index]) if not ros_line(line))
+    below = next((line for line in lines[index + 1:] if not ros_line(line)), None)
+    return above, below
+
+
+def assert_in_place(before, old, after, new):
+    """Assert line new of after stands where line old stood in before."""
+    assert after.count(new) == 1
+    assert neighbours(after, after.index(new)) == neighbours(before, before.index(old))
+
+
+# ---------------------------------------------------------------------------------------------
+# Every board, every starting state
+
+@pytest.mark.parametrize('state', STATES)
+@pytest.mark.parametrize('board', sorted(BOARDS))
+def test_enables_every_state_and_is_idempotent(tmp_path, board, state):
+    project = make_project(tmp_path, board, state)
+    before = {path: (project / path).read_bytes() for path in (USER, ROOTFS)}
+
+    check = run_tool(project, '--check')
+    assert check.returncode == (0 if state == 'enabled' else 1), check.stdout
+    assert {path: (project / path).read_bytes() for path in before} == before
+
+    first = run_tool(project)
+    assert first.returncode == 0, first.stderr
+    assert 'board: %s' % board in first.stdout
+    assert 'petalinux-config -c rootfs --silentconfig' in first.stdout
+    assert_enabled(project)
+    after = {path: (project / path).read_bytes() for path in before}
+    for path in before:
+        assert_only_ros_lines_changed(before[path], after[path])
+    if state == 'enabled':
+        assert after == before
+        assert 'nothing to change' in first.stdout
+
+    second = run_tool(project)
+    assert second.returncode == 0
+    assert 'nothing to change' in second.stdout
+    assert {path: (project / path).read_bytes() for path in before} == after
+    assert run_tool(project, '--check').returncode == 0
+
+
+def test_fresh_project_adds_in_sorted_block_and_appends_declarations(tmp_path):
+    project = make_project(tmp_path, 'zub1cg', 'fresh')
+    before_user = (project / USER).read_text()
+    assert run_tool(project).returncode == 0
+    user = (project / USER).read_text()
+    assert user == before_user + ''.join('CONFIG_%s\n' % name for name in ROS)
+    lines = (project / ROOTFS).read_text().split('\n')
+    start = lines.index('# user packages ') + 2
+    end = lines.index('', start)
+    names = [re.search(r'CONFIG_([^= ]+)', line).group(1) for line in lines[start:end]]
+    assert names == sorted(names)
+    assert set(ROS) <= set(names)
+    assert 'gpio-demo' in names and 'blinky' in names  # the board's own packages stay
+    assert lines[end + 2] == '# PetaLinux RootFS Settings'
+
+
+def test_is_not_set_lines_are_switched_in_place(tmp_path):
+    project = make_project(tmp_path, 'u96v2', 'declared_not_set')
+    before = (project / ROOTFS).read_text().split('\n')
+    user_before = (project / USER).read_bytes()
+    result = run_tool(project)
+    after = (project / ROOTFS).read_text().split('\n')
+    for name in ('packagegroup-petalinux-ros', 'packagegroup-petalinux-ros-dev'):
+        assert_in_place(before, '# CONFIG_%s is not set' % name, after, 'CONFIG_%s=y' % name)
+    assert (project / USER).read_bytes() == user_before  # already declared: untouched
+    assert 'user-rootfsconfig: declared 0, already 8' in result.stdout
+    assert 'rootfs_config: enabled 6, already 2' in result.stdout
+
+
+def test_commented_declarations_are_uncommented_in_place(tmp_path):
+    project = make_project(tmp_path, 'uz7ev', 'commented')
+    before = (project / USER).read_text().split('\n')
+    assert run_tool(project).returncode == 0
+    after = (project / USER).read_text().split('\n')
+    assert len(after) == len(before)
+    for name in ROS:
+        commented = [line for line in before if line.lstrip('# ') == 'CONFIG_' + name]
+        assert after.index('CONFIG_' + name) == before.index(commented[0])
+
+
+def test_missing_final_newline_is_never_glued(tmp_path):
+    project = make_project(tmp_path, 'zub1cg', 'no_final_newline')
+    user_before = (project / USER).read_bytes()
+    rootfs_before = (project / ROOTFS).read_bytes()
+    assert not user_before.endswith(b'\n') and not rootfs_before.endswith(b'\n')
+    assert run_tool(project).returncode == 0
+    assert (project / USER).read_bytes() == user_before + b'\n' + b''.join(
+        b'CONFIG_%s\n' % name.encode() for name in ROS)
+    assert (project / ROOTFS).read_bytes() == rootfs_before + b'\n' + b''.join(
+        b'CONFIG_%s=y\n' % name.encode() for name in ROS)
+    assert b'CONFIG_ADD_USERS_TO_SUDOERS="petalinux"\n' in (project / ROOTFS).read_bytes()
+
+
+def test_crlf_files_stay_crlf(tmp_path):
+    project = make_project(tmp_path, 'u96v2', 'crlf')
+    assert run_tool(project).returncode == 0
+    for path in (USER, ROOTFS):
+        data = (project / path).read_bytes()
+        assert data.count(b'\n') == data.count(b'\r\n') > 0
+
+
+def test_duplicates_and_non_y_values_end_as_one_y(tmp_path):
+    project = make_project(tmp_path, 'zub1cg', 'messy')
+    before = (project / ROOTFS).read_text().split('\n')
+    result = run_tool(project)
+    assert result.returncode == 0
+    after = (project / ROOTFS).read_text().split('\n')
+    # A non-y value is rewritten where it stands; later repeats are removed.
+    assert_in_place(before, 'CONFIG_turtlesim=m', after, 'CONFIG_turtlesim=y')
+    assert_in_place(before, 'CONFIG_v4l2-camera=y ', after, 'CONFIG_v4l2-camera=y')
+    assert 'CONFIG_v4l2-camera-dev=n' not in after
+    assert after.count('CONFIG_cv-bridge=y') == 1
+    assert '# CONFIG_turtlesim-dev is not set' not in after
+    user = (project / USER).read_text().split('\n')
+    assert user.count('CONFIG_cv-bridge') == 1
+    assert 'CONFIG_turtlesim' in user and '#CONFIG_turtlesim' not in user
+    assert 'CONFIG_v4l2-camera' in user
+    # The pasted 'is not set' comment is a broken declaration for PetaLinux: left alone, and
+    # the user is told.
+    assert '# CONFIG_cv-bridge is not set' in user
+    assert "PetaLinux still reads it as declaring 'cv-bridge is not set'" in result.stderr
+
+
+def test_other_bytes_survive_even_when_not_utf8(tmp_path):
+    project = make_project(tmp_path, 'uz7ev', 'fresh')
+    odd = b'\xef\xbb\xbf#Paquets ajout\xe9s \xa0\n'
+    (project / USER).write_bytes(odd + (project / USER).read_bytes())
+    before = (project / USER).read_bytes()
+    assert run_tool(project).returncode == 0
+    after = (project / USER).read_bytes()
+    assert after.startswith(before)
+    assert model.declarations(after)[-len(ROS):] == ROS
+
+
+# ---------------------------------------------------------------------------------------------
+# The modes and the errors
+
+def test_dry_run_prints_the_diff_and_writes_nothing(tmp_path):
+    project = make_project(tmp_path, 'zub1cg', 'declared_not_set')
+    before = {path: (project / path).read_bytes() for path in (USER, ROOTFS)}
+    stamps = {path: (project / path).stat().st_mtime_ns for path in before}
+    result = run_tool(project, '--dry-run')
+    assert result.returncode == 0
+    assert '-# CONFIG_packagegroup-petalinux-ros is not set' in result.stdout
+    assert '+CONFIG_packagegroup-petalinux-ros=y' in result.stdout
+    assert '+CONFIG_v4l2-camera=y' in result.stdout
+    assert 'dry run: nothing written' in result.stdout
+    assert {path: (project / path).read_bytes() for path in before} == before
+    assert {path: (project / path).stat().st_mtime_ns for path in before} == stamps
+    assert sorted(os.listdir(project / ROOTFS.parent)) == ['config', 'rootfs_config']
+
+
+def test_check_lists_what_is_missing(tmp_path):
+    project = make_project(tmp_path, 'uz7ev', 'declared_not_set')
+    result = run_tool(project, '--check')
+    assert result.returncode == 1
+    assert 'rootfs_config: packagegroup-petalinux-ros: line' in result.stdout
+    assert 'rootfs_config: turtlesim-dev: not assigned' in result.stdout
+    assert 'user-rootfsconfig' not in result.stdout.split('problem(s):')[1]
+    assert 'rootfs_config: cv-bridge:' not in result.stdout
+
+
+@pytest.mark.parametrize('board', sorted(BOARDS))
+def test_board_is_read_from_the_project_settings(tmp_path, board):
+    project = make_project(tmp_path, board, 'fresh')
+    assert enable_ros.detect_board(str(project)) == (
+        board, 'CONFIG_SUBSYSTEM_HOSTNAME="%s"' % BOARDS[board])
+
+
+@pytest.mark.parametrize('hostname, machine, board', [
+    ('my-robot', 'zub1cg-sbc-dualcam', 'zub1cg'),
+    ('ultra96v2-ros', 'zynqmp-generic', 'u96v2'),
+    ('UZ7EV_EVCC_2023_2', 'zynqmp-generic', 'uz7ev'),
+])
+def test_board_detection_variants(tmp_path, hostname, machine, board):
+    project = make_project(tmp_path, 'zub1cg', 'fresh')
+    config = (project / CONFIG).read_text()
+    config = re.sub(r'(CONFIG_SUBSYSTEM_(HOSTNAME|PRODUCT))="[^"]*"', r'\1="%s"' % hostname,
+                    config)
+    config = re.sub(r'CONFIG_YOCTO_MACHINE_NAME="[^"]*"',
+                    'CONFIG_YOCTO_MACHINE_NAME="%s"' % machine, config)
+    (project / CONFIG).write_text(config)
+    assert enable_ros.detect_board(str(project))[0] == board
+
+
+def test_unknown_board_is_refused_until_given(tmp_path):
+    project = make_project(tmp_path, 'u96v2', 'fresh')
+    config = (project / CONFIG).read_text()
+    config = re.sub(r'u96v2-sbc(-2023-2|-2023\.2)?', 'custom-board', config)
+    (project / CONFIG).write_text(config)
+    before = (project / ROOTFS).read_bytes()
+    refused = run_tool(project)
+    assert refused.returncode == 2
+    assert 'cannot tell the board' in refused.stderr
+    assert '--board zub1cg|u96v2|uz7ev' in refused.stderr
+    assert (project / ROOTFS).read_bytes() == before
+    given = run_tool(project, '--board', 'u96v2')
+    assert given.returncode == 0, given.stderr
+    assert 'given with --board' in given.stdout
+    assert_enabled(project)
+
+
+def test_board_flag_works_without_project_settings(tmp_path):
+    project = make_project(tmp_path, 'uz7ev', 'fresh')
+    (project / CONFIG).unlink()
+    assert run_tool(project).returncode == 2
+    assert run_tool(project, '--board', 'uz7ev').returncode == 0
+    assert_enabled(project)
+
+
+def test_conflicting_board_flag_is_warned_about(tmp_path):
+    project = make_project(tmp_path, 'zub1cg', 'fresh')
+    result = run_tool(project, '--board', 'u96v2')
+    assert result.returncode == 0
+    assert 'warning: the project looks like a zub1cg board' in result.stderr
+
+
+@pytest.mark.parametrize('breakage, message', [
+    ('no_dir', 'project directory not found'),
+    ('not_project', 'not a PetaLinux project'),
+    ('no_user', 'user-rootfsconfig not found'),
+    ('no_rootfs', 'rootfs_config not found'),
+    ('rootfs_is_dir', 'is a directory'),
+])
+def test_missing_or_unreadable_files_are_clear_errors(tmp_path, breakage, message):
+    project = make_project(tmp_path, 'zub1cg', 'fresh')
+    user_before = (project / USER).read_bytes()
+    if breakage == 'no_dir':
+        project = tmp_path / 'nowhere'
+    elif breakage == 'not_project':
+        shutil.rmtree(project / 'project-spec')
+    elif breakage == 'no_user':
+        (project / USER).unlink()
+    elif breakage == 'no_rootfs':
+        (project / ROOTFS).unlink()
+    else:
+        (project / ROOTFS).unlink()
+        (project / ROOTFS).mkdir()
+    for extra in ([], ['--check'], ['--dry-run']):
+        result = run_tool(project, *extra)
+        assert result.returncode == 2
+        assert result.stderr.startswith('error: ') and message in result.stderr, result.stderr
+    if breakage == 'no_rootfs':  # nothing half-done: the declarations were not written either
+        assert (project / USER).read_bytes() == user_before
+
+
+def test_check_and_dry_run_together_is_a_usage_error(tmp_path):
+    project = make_project(tmp_path, 'zub1cg', 'fresh')
+    result = run_tool(project, '--check', '--dry-run')
+    assert result.returncode == 2
+    assert 'not allowed with' in result.stderr
+
+
+# ---------------------------------------------------------------------------------------------
+# Writing
+
+def test_write_keeps_mode_and_follows_symlinks(tmp_path):
+    project = make_project(tmp_path, 'zub1cg', 'fresh')
+    real = tmp_path / 'shared-rootfs_config'
+    shutil.move(str(project / ROOTFS), real)
+    (project / ROOTFS).symlink_to(real)
+    os.chmod(real, 0o640)
+    assert run_tool(project).returncode == 0
+    assert (project / ROOTFS).is_symlink()
+    assert real.stat().st_mode & 0o7777 == 0o640
+    assert model.assignments(real.read_bytes())['cv-bridge'] == ['y']
+    assert sorted(os.listdir(tmp_path)) == ['shared-rootfs_config', 'zub1cg']
+
+
+def test_a_failed_write_leaves_the_old_file_and_no_debris(tmp_path, monkeypatch):
+    path = tmp_path / 'rootfs_config'
+    path.write_bytes(b'# CONFIG_cv-bridge is not set\n')
+
+    def crash(src, dst):
+        raise OSError(28, 'No space left on device')
+
+    monkeypatch.setattr(enable_ros.os, 'replace', crash)
+    with pytest.raises(OSError):
+        enable_ros.write_atomically(str(path), 'CONFIG_cv-bridge=y\n')
+    assert path.read_bytes() == b'# CONFIG_cv-bridge is not set\n'
+    assert os.listdir(tmp_path) == ['rootfs_config']
+
+
+# ---------------------------------------------------------------------------------------------
+# The fragments
+
+@pytest.mark.parametrize('board', sorted(BOARDS))
+def test_fragments_hold_the_ros_packages_and_obey_petalinux_rules(board):
+    directory = HERE.parent / 'boards' / board
+    user = (directory / 'user-rootfsconfig').read_bytes()
+    rootfs = (directory / 'rootfs_config').read_bytes()
+    assert model.declarations(user) == ROS  # no comment that PetaLinux would misread
+    assert model.assignments(rootfs) == {name: ['y'] for name in ROS}
+    assert model.image_packages(rootfs) == ROS
+    assert enable_ros.load_fragments(board) == (ROS, ROS)
+
+
+def test_a_board_can_differ_by_editing_its_fragments(tmp_path, monkeypatch):
+    boards = tmp_path / 'boards'
+    shutil.copytree(HERE.parent / 'boards', boards)
+    for name, line in (('user-rootfsconfig', 'CONFIG_nano\n'),
+                       ('rootfs_config', 'CONFIG_nano=y\n')):
+        with open(boards / 'u96v2' / name, 'a') as stream:
+            stream.write(line)
+    monkeypatch.setattr(enable_ros, 'BOARDS_DIR', str(boards))
+    project = make_project(tmp_path, 'u96v2', 'fresh')
+    assert enable_ros.main([str(project)]) == 0
+    assert model.assignments((project / ROOTFS).read_bytes())['nano'] == ['y']
+    assert model.declarations((project / USER).read_bytes()).count('nano') == 1
+    assert_enabled(project)
+
+
+@pytest.mark.parametrize('content, message', [
+    ('#enable CONFIG_cv-bridge too\nCONFIG_cv-bridge\n', 'read this comment as a declaration'),
+    ('CONFIG_cv_bridge\n', 'package name'),
+    ('CONFIG_cv-bridge\nCONFIG_cv-bridge\n', 'listed twice'),
+    ('#nothing\n', 'lists no package'),
+])
+def test_broken_fragments_are_refused(tmp_path, content, message):
+    path = tmp_path / 'user-rootfsconfig'
+    path.write_text(content)
+    with pytest.raises(enable_ros.ToolError, match=message):
+        enable_ros.read_fragment(str(path), 'CONFIG_{}', 'fragment')
