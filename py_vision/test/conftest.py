@@ -53,7 +53,7 @@ def ros_env(domain_id):
 @pytest.fixture
 def launch(ros_env):
     """
-    Start installed executables, as in launch('usbcam_publisher', params={}, remaps={}).
+    Start installed executables by name, with parameters and remappings as dicts.
 
     Every process is stopped at the end of the test, whatever happened.
     """
