@@ -1,0 +1,126 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+Benchmark the synthetic V4L2 source: the cost of one read() without its pacing, and its CPU use.
+
+Run from the repository root: ``.venv/bin/python bench/bench_synthetic.py``. The reference is
+the YUYV to BGR conversion alone, which OpenCV's V4L2 backend pays for every frame of a real
+camera too. Prints a Markdown table of medians and writes bench/results/synthetic.json.
+"""
+
+import json
+from pathlib import Path
+import platform
+import statistics
+import sys
+import time
+
+import cv2
+import numpy as np
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO / 'py_vision'))
+
+from py_vision import synthetic_camera  # noqa: E402
+
+SIZES = [(640, 480), (1280, 720), (1920, 1080)]
+SAMPLES = 200
+PACED = (640, 480, 30.0, 3.0)  # width, height, fps, seconds of real-time reading
+
+
+class LateClock:
+    """A clock one frame period further on at every look: read() never has to wait."""
+
+    def __init__(self, fps):
+        self.t = 0.0
+        self.step = 1.0 / fps
+
+    def now(self):
+        self.t += self.step
+        return self.t
+
+
+def median_us(func):
+    func()
+    samples = []
+    for _ in range(SAMPLES):
+        start = time.perf_counter()
+        func()
+        samples.append(time.perf_counter() - start)
+    return statistics.median(samples) * 1e6
+
+
+def unpaced_read_us(width, height):
+    clock = LateClock(30.0)
+    real_now = synthetic_camera._now
+    synthetic_camera._now = clock.now
+    try:
+        cam = synthetic_camera.SyntheticCamera(width, height, 30.0, name='bench')
+        return median_us(cam.read)
+    finally:
+        synthetic_camera._now = real_now
+
+
+def paced_cpu_percent(width, height, fps, seconds):
+    """Share of one core a loop of paced read() calls uses."""
+    cam = synthetic_camera.SyntheticCamera(width, height, fps, name='bench-paced')
+    cam.read()
+    wall, cpu = time.monotonic(), time.process_time()
+    frames = 0
+    while time.monotonic() - wall < seconds:
+        frames += cam.read()[0]
+    wall, cpu = time.monotonic() - wall, time.process_time() - cpu
+    return 100.0 * cpu / wall, frames / wall
+
+
+def main():
+    rows = []
+    for width, height in SIZES:
+        yuyv = synthetic_camera.synthetic_yuyv(1, width, height)
+        frame = synthetic_camera.synthetic_frame(1, width, height)
+        times = {
+            'cvtColor YUYV->BGR (reference)':
+                median_us(lambda: cv2.cvtColor(yuyv, cv2.COLOR_YUV2BGR_YUYV)),
+            'SyntheticCamera.read() without pacing': unpaced_read_us(width, height),
+            'synthetic_frame()':
+                median_us(lambda: synthetic_camera.synthetic_frame(7, width, height)),
+            'read_frame_index()': median_us(lambda: synthetic_camera.read_frame_index(frame)),
+        }
+        reference = times['cvtColor YUYV->BGR (reference)']
+        for name, micros in times.items():
+            rows.append({'size': '%dx%d' % (width, height), 'case': name,
+                         'median_us': micros, 'vs_cvtcolor': micros / reference})
+    print('| size | case | median | x cvtColor |')
+    print('|---|---|---:|---:|')
+    for row in rows:
+        cells = (row['size'], row['case'], row['median_us'], row['vs_cvtcolor'])
+        print('| %s | %s | %.1f us | %.2f |' % cells)
+    width, height, fps, seconds = PACED
+    cpu, achieved = paced_cpu_percent(width, height, fps, seconds)
+    print('\npaced read() loop, %dx%d at %g fps for %g s: %.1f fps, %.1f%% of one core'
+          % (width, height, fps, seconds, achieved, cpu))
+    result = {'python': platform.python_version(), 'numpy': np.__version__,
+              'opencv': cv2.__version__, 'machine': platform.machine(), 'rows': rows,
+              'paced': {'size': '%dx%d' % (width, height), 'fps': fps,
+                        'achieved_fps': achieved, 'cpu_percent_of_one_core': cpu}}
+    out = REPO / 'bench' / 'results' / 'synthetic.json'
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(result, indent=2) + '\n')
+    print('\nwrote %s' % out.relative_to(REPO))
+
+
+if __name__ == '__main__':
+    main()

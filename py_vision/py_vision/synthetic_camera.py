@@ -1,0 +1,645 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+The synthetic V4L2 source: a camera with OpenCV's VideoCapture interface and no hardware.
+
+`SyntheticCamera` behaves like a V4L2 camera seen through OpenCV: it honours the requested size
+and frame rate (an odd width is rounded down to even, as YUYV needs), builds every frame as a
+packed YUYV 4:2:2 buffer and converts it with ``cv2.COLOR_YUV2BGR_YUYV`` as OpenCV's V4L2 backend
+does, and paces frames in real time with a single buffer: a caller that falls behind gets the
+newest frame and the frames in between are lost (their indices are skipped).
+
+Every frame shows 75% colour bars with a moving box, a grey ramp and, in a dark strip at the
+bottom, the frame index as digits and as a 4 x 11 grid of black/white blocks that
+`read_frame_index` decodes (32 bits of index, an 8-bit CRC and four corner sync blocks). The
+blocks are pure luma over neutral chroma, so they stay grey through YUYV, JPEG and the bridge.
+A block is 1/40 of the width or 1/30 of the height, whichever is smaller, kept within 4..32
+pixels; frames smaller than 64 x 48 (`MIN_CODE_SIZE`) carry the bars and the box only. Each
+frame is built from a YUYV background precomputed once per size, and read() returns a new array
+every time (the caller may keep it while the next frame is built).
+
+Faults for tests, as constructor options or in a ``video_device`` string (`open_synthetic`):
+``fail_open`` (never opens), ``stop_after`` (unplugged after N frames), ``unplugged_for``
+(reopening works again that many seconds after the unplug) and ``fail_every`` (every K-th read
+fails while the device stays open). Devices with the same name and options share one state, kept
+in this module: the frame index and an unplug carry over to the next camera opened with them.
+"""
+
+import math
+import threading
+import time
+from urllib.parse import parse_qsl
+
+import cv2
+import numpy as np
+
+MAX_SIZE = 8192
+MIN_CODE_SIZE = (64, 48)
+MAX_FPS = 1000.0
+FOURCC_YUYV = float(cv2.VideoWriter_fourcc(*'YUYV'))
+
+# Patched by the tests to run the pacing on a fake clock.
+_now = time.monotonic
+_sleep = time.sleep
+
+_BLACK = 16
+_WHITE = 235
+_STRIP = 40
+_CODE_ROWS, _CODE_COLS = 4, 11
+# Corner blocks with fixed values let the decoder measure black and white in the image itself.
+_SYNC = {(0, 0): 1, (0, _CODE_COLS - 1): 0, (_CODE_ROWS - 1, 0): 0,
+         (_CODE_ROWS - 1, _CODE_COLS - 1): 1}
+_DATA_CELLS = [(r, c) for r in range(_CODE_ROWS) for c in range(_CODE_COLS)
+               if (r, c) not in _SYNC]
+# 75% colour bars, BGR: white, yellow, cyan, green, magenta, red, blue.
+_BARS = [(191, 191, 191), (0, 191, 191), (191, 191, 0), (0, 191, 0), (191, 0, 191),
+         (0, 0, 191), (191, 0, 0)]
+_BOX_PERIOD = 64
+_OPTIONS = 'fail_open, stop_after, unplugged_for, fail_every'
+
+
+def _crc8(data):
+    crc = 0
+    for byte in data:
+        crc ^= byte
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x07) & 0xFF if crc & 0x80 else (crc << 1) & 0xFF
+    return crc
+
+
+def _code_bits(index):
+    """Return the 40 data-cell bits for an index: 32 bits of index then the CRC-8, MSB first."""
+    value = index & 0xFFFFFFFF
+    payload = value.to_bytes(4, 'big')
+    word = (value << 8) | _crc8(payload)
+    return [(word >> (39 - i)) & 1 for i in range(40)]
+
+
+class _Geometry:
+    """Where everything goes in a frame of one size (cheap: the decoder uses it too)."""
+
+    def __init__(self, width, height):
+        self.width, self.height = width, height
+        self.code = None
+        self.strip_y = height
+        if width >= MIN_CODE_SIZE[0] and height >= MIN_CODE_SIZE[1]:
+            cell = max(4, min(32, min(width // 40, height // 30) & ~1))
+            margin = cell // 2
+            self.strip_y = height - (_CODE_ROWS * cell + 2 * margin)
+            self.code = (width - margin - _CODE_COLS * cell, self.strip_y + margin, cell)
+            self.digits_area = (margin, self.strip_y + margin,
+                                self.code[0] - 2 * margin, _CODE_ROWS * cell)
+        scene = self.strip_y
+        self.bars_h = max(1, (scene * 2) // 3)
+        self.box_h = max(1, self.bars_h // 4)
+        self.box_y = (self.bars_h - self.box_h) // 2
+        self.box_w = min(width, max(2, (width // 16) & ~1))
+
+
+_geometry_cache = {}
+_layout_cache = {}
+_cache_lock = threading.Lock()
+
+
+def _geometry(width, height):
+    key = (width, height)
+    geo = _geometry_cache.get(key)
+    if geo is None:
+        geo = _Geometry(width, height)
+        with _cache_lock:
+            if len(_geometry_cache) > 32:
+                _geometry_cache.clear()
+            _geometry_cache[key] = geo
+    return geo
+
+
+def bgr_to_yuyv(bgr):
+    """
+    Convert a BGR uint8 image of even width to packed YUYV (BT.601, video range).
+
+    This is the inverse of ``cv2.COLOR_YUV2BGR_YUYV``, done in numpy because older OpenCV 4.x
+    has no BGR to YUYV conversion. Chroma is the average of each horizontal pixel pair.
+    """
+    height, width = bgr.shape[:2]
+    if width % 2:
+        raise ValueError('YUYV needs an even width, got %d' % width)
+    b, g, r = (bgr[:, :, i].astype(np.float32) for i in range(3))
+    y = 16.0 + 0.2568 * r + 0.5041 * g + 0.0979 * b
+    u = 128.0 - 0.1482 * r - 0.2910 * g + 0.4392 * b
+    v = 128.0 + 0.4392 * r - 0.3678 * g - 0.0714 * b
+    out = np.empty((height, width, 2), np.uint8)
+    out[:, :, 0] = np.clip(np.rint(y), 0, 255)
+    out[:, 0::2, 1] = np.clip(np.rint((u[:, 0::2] + u[:, 1::2]) / 2), 0, 255)
+    out[:, 1::2, 1] = np.clip(np.rint((v[:, 0::2] + v[:, 1::2]) / 2), 0, 255)
+    return out
+
+
+def yuyv_to_bgr(yuyv):
+    """Convert packed YUYV to BGR exactly as OpenCV's V4L2 backend does."""
+    return cv2.cvtColor(yuyv, cv2.COLOR_YUV2BGR_YUYV)
+
+
+class _Layout:
+    """The precomputed YUYV background and digit glyphs for one frame size."""
+
+    def __init__(self, width, height):
+        geo = self.geo = _geometry(width, height)
+        bgr = np.empty((height, width, 3), np.uint8)
+        bar_edges = [(width * i // len(_BARS)) & ~1 for i in range(len(_BARS))] + [width]
+        for i, colour in enumerate(_BARS):
+            bgr[:geo.bars_h, bar_edges[i]:bar_edges[i + 1]] = colour
+        ramp = np.linspace(0, 255, width).astype(np.uint8)
+        bgr[geo.bars_h:] = ramp[None, :, None]
+        self.background = bgr_to_yuyv(bgr)
+        # The strip and the ramp are grey: neutral chroma, so YUYV keeps them exactly grey.
+        self.background[geo.bars_h:, :, 1] = 128
+        self.background[geo.strip_y:, :, 0] = _STRIP
+        self.glyphs = None
+        if geo.code is not None:
+            self._make_glyphs()
+
+    def _make_glyphs(self):
+        x0, y0, area_w, area_h = self.geo.digits_area
+        font = cv2.FONT_HERSHEY_SIMPLEX
+        thickness = max(1, area_h // 12)
+        (text_w, text_h), _ = cv2.getTextSize('0', font, 1.0, thickness)
+        # The text fills 70% of the strip height, shrunk if six digits would not fit.
+        scale = min(0.7 * area_h / text_h, area_w / (6 * 1.15 * text_w))
+        if scale * text_h < 5:
+            return
+        cell_w = max(2, int(math.ceil(1.15 * text_w * scale)))
+        count = min(10, area_w // cell_w)
+        baseline_y = (area_h + int(round(text_h * scale))) // 2
+        glyphs = np.empty((10, area_h, cell_w), np.uint8)
+        for digit in range(10):
+            mask = np.zeros((area_h, cell_w), np.uint8)
+            cv2.putText(mask, str(digit), (max(0, cell_w // 12), baseline_y), font, scale, 255,
+                        thickness, cv2.LINE_AA)
+            glyphs[digit] = (_STRIP + mask.astype(np.uint16) * (_WHITE - _STRIP) // 255)
+        self.glyphs = glyphs
+        self.blank = np.full_like(glyphs[0], _STRIP)
+        self.digit_count = count
+        self.digits_origin = (x0, y0)
+
+    def render(self, index, buf, fresh):
+        """Draw frame `index` into `buf` (YUYV, a copy of the background if `fresh`)."""
+        geo = self.geo
+        y0, y1 = geo.box_y, geo.box_y + geo.box_h
+        if not fresh:
+            buf[y0:y1] = self.background[y0:y1]
+        travel = geo.width - geo.box_w
+        x = ((index % _BOX_PERIOD) * travel // (_BOX_PERIOD - 1)) & ~1 if travel > 0 else 0
+        box = buf[y0:y1, x:x + geo.box_w]
+        box[:, :, 1] = 128
+        box[:, :, 0] = _BLACK
+        edge = max(1, geo.box_w // 8)
+        if geo.box_h > 2 * edge:
+            box[edge:-edge, edge:-edge, 0] = _WHITE
+        if geo.code is None:
+            return
+        if self.glyphs is not None:
+            text = str(index)[-self.digit_count:].ljust(self.digit_count)
+            digits = [self.glyphs[int(ch)] if ch != ' ' else self.blank for ch in text]
+            dx, dy = self.digits_origin
+            row = np.concatenate(digits, axis=1)
+            buf[dy:dy + row.shape[0], dx:dx + row.shape[1], 0] = row
+        cx, cy, cell = geo.code
+        cells = np.empty((_CODE_ROWS, _CODE_COLS), np.uint8)
+        for (r, c), bit in _SYNC.items():
+            cells[r, c] = _WHITE if bit else _BLACK
+        for (r, c), bit in zip(_DATA_CELLS, _code_bits(index)):
+            cells[r, c] = _WHITE if bit else _BLACK
+        blocks = np.repeat(np.repeat(cells, cell, axis=0), cell, axis=1)
+        buf[cy:cy + blocks.shape[0], cx:cx + blocks.shape[1], 0] = blocks
+
+
+def _layout(width, height):
+    key = (width, height)
+    layout = _layout_cache.get(key)
+    if layout is None:
+        layout = _Layout(width, height)
+        with _cache_lock:
+            if len(_layout_cache) > 8:
+                _layout_cache.clear()
+            _layout_cache[key] = layout
+    return layout
+
+
+def synthetic_yuyv(index, width, height):
+    """Return the YUYV buffer of frame `index` at this size (a new array)."""
+    layout = _layout(width, height)
+    buf = layout.background.copy()
+    layout.render(index, buf, fresh=True)
+    return buf
+
+
+def synthetic_frame(index, width, height):
+    """Return exactly the BGR image a SyntheticCamera of this size gives for frame `index`."""
+    return yuyv_to_bgr(synthetic_yuyv(index, width, height))
+
+
+def _luma(image):
+    """Return the image as float32 luma on a 0..255 scale, or None if it is not an image."""
+    image = np.asarray(image)
+    if image.ndim == 3:
+        channels = image.shape[2]
+        if channels >= 3:
+            # Summing channel planes is many times faster than mean(axis=2).
+            luma = image[:, :, 0].astype(np.float32)
+            luma += image[:, :, 1]
+            luma += image[:, :, 2]
+            luma /= 3.0
+        elif channels == 2:
+            luma = image[:, :, 0].astype(np.float32)  # raw YUYV: luma first
+        elif channels == 1:
+            luma = image[:, :, 0].astype(np.float32)
+        else:
+            return None
+    elif image.ndim == 2:
+        luma = image.astype(np.float32)
+    else:
+        return None
+    if image.dtype == np.uint16 and luma.size and luma.max() > 255:
+        luma /= 257.0
+    elif image.dtype.kind == 'f' and luma.size and luma.max() <= 1.0:
+        luma *= 255.0
+    return luma
+
+
+def read_frame_index(image):
+    """
+    Decode the frame index a synthetic frame carries, or None if the image has no code.
+
+    Works on the camera's BGR frames and on what the bridge or JPEG (quality 50 or better)
+    makes of them: RGB, BGRA, mono8/mono16, float images, as long as the size is unchanged.
+    """
+    if image is None:
+        return None
+    shape = np.shape(image)
+    if len(shape) < 2:
+        return None
+    geo = _geometry(int(shape[1]), int(shape[0]))
+    if geo.code is None:
+        return None
+    cx, cy, cell = geo.code
+    # Only the code's pixels are converted: decoding costs the same at any frame size.
+    grid = _luma(np.asarray(image)[cy:cy + _CODE_ROWS * cell, cx:cx + _CODE_COLS * cell])
+    if grid is None:
+        return None
+    grid = grid.reshape(_CODE_ROWS, cell, _CODE_COLS, cell)
+    inset = cell // 4
+    inner = grid[:, inset:cell - inset, :, inset:cell - inset]
+    count = float(inner.shape[1] * inner.shape[3])
+    means = inner.sum(axis=3).sum(axis=1) / count
+    squares = (inner * inner).sum(axis=3).sum(axis=1) / count
+    spread = np.sqrt(np.maximum(squares - means * means, 0.0))
+    white = np.mean([means[rc] for rc, bit in _SYNC.items() if bit])
+    black = np.mean([means[rc] for rc, bit in _SYNC.items() if not bit])
+    contrast = white - black
+    if contrast < 100:
+        return None
+    threshold = (white + black) / 2
+    if np.any(np.abs(means - threshold) < 0.3 * contrast) or np.any(spread > 0.2 * contrast):
+        return None
+    bits = [int(means[rc] > threshold) for rc in _DATA_CELLS]
+    word = 0
+    for bit in bits:
+        word = (word << 1) | bit
+    value, crc = word >> 8, word & 0xFF
+    if _crc8(value.to_bytes(4, 'big')) != crc:
+        return None
+    return value
+
+
+class FramePacer:
+    """
+    Real-time frame schedule: frame n is due at t0 + n / fps, t0 being the first wait().
+
+    With ``drop=True`` (a camera with a single buffer) a late caller gets the newest due frame
+    and the frames in between are skipped. With ``drop=False`` (a file played in real time) a
+    late caller gets the next frame at once and the schedule restarts from there.
+    """
+
+    def __init__(self, fps, drop=True):
+        self.fps = fps
+        self.drop = drop
+        self.t0 = None
+        self.next = 0
+
+    def restart(self):
+        """Start a new schedule at the next wait() (after a size or rate change)."""
+        self.t0 = None
+        self.next = 0
+
+    @property
+    def running(self):
+        return self.t0 is not None
+
+    def wait(self):
+        """Block until the next frame is due; return its number in this schedule and due time."""
+        now = _now()
+        if self.t0 is None:
+            self.t0 = now
+            self.next = 1
+            return 0, now
+        number = self.next
+        due = self.t0 + number / self.fps
+        if now >= due + 1.0 / self.fps:
+            if self.drop:
+                number = max(number, int(math.floor((now - self.t0) * self.fps)))
+                due = self.t0 + number / self.fps
+            else:
+                self.t0 = now - number / self.fps
+                due = now
+        else:
+            _sleep_until(due)
+        self.next = number + 1
+        return number, due
+
+
+def _sleep_until(deadline):
+    # Sleep most of the wait, then short sleeps: never more than ~0.1 ms late, no busy spin.
+    while True:
+        remaining = deadline - _now()
+        if remaining <= 0:
+            return
+        _sleep(remaining - 0.001 if remaining > 0.002 else remaining)
+
+
+class _DeviceState:
+    """What outlives one SyntheticCamera object: the frame sequence and an unplug."""
+
+    def __init__(self):
+        self.last_index = None
+        self.last_time = None
+        self.unplugged_at = None
+        self.recovered = False
+
+
+_devices = {}
+_devices_lock = threading.Lock()
+
+
+def reset_synthetic_devices():
+    """Forget every device's state (frame sequence, unplugs): for tests."""
+    with _devices_lock:
+        _devices.clear()
+
+
+def _device_state(key):
+    with _devices_lock:
+        return _devices.setdefault(key, _DeviceState())
+
+
+def _check_size(value):
+    if not isinstance(value, (int, float, np.integer, np.floating)) or isinstance(value, bool):
+        return None
+    if not math.isfinite(value) or value <= 0 or value > MAX_SIZE:
+        return None
+    return int(value)
+
+
+def _check_fps(value):
+    if not isinstance(value, (int, float, np.integer, np.floating)) or isinstance(value, bool):
+        return None
+    if not math.isfinite(value) or value <= 0 or value > MAX_FPS:
+        return None
+    return float(value)
+
+
+class SyntheticCamera:
+    """
+    A V4L2 camera without hardware, with OpenCV's VideoCapture interface.
+
+    `last_index` is the frame index of the image the last successful read() returned and
+    `last_capture_time` the time.monotonic() at which it was captured (its due time; earlier
+    than the read's return when the caller was late). `error` says why the device is not
+    open, or why its reads fail, or is None.
+    """
+
+    def __init__(self, width=640, height=480, fps=10.0, *, fail_open=False, stop_after=None,
+                 unplugged_for=None, fail_every=None, name='synthetic'):
+        w, h, rate = _check_size(width), _check_size(height), _check_fps(fps)
+        if w is None or h is None:
+            raise ValueError('image size must be 1..%d pixels each way, got %r x %r'
+                             % (MAX_SIZE, width, height))
+        if rate is None:
+            raise ValueError('framerate must be > 0 and <= %g, got %r' % (MAX_FPS, fps))
+        if stop_after is not None and (int(stop_after) != stop_after or stop_after < 0):
+            raise ValueError('stop_after must be an integer >= 0, got %r' % (stop_after,))
+        if unplugged_for is not None and not (0 <= unplugged_for < math.inf):
+            raise ValueError('unplugged_for must be a number of seconds >= 0, got %r'
+                             % (unplugged_for,))
+        if fail_every is not None and (int(fail_every) != fail_every or fail_every < 1):
+            raise ValueError('fail_every must be an integer >= 1, got %r' % (fail_every,))
+        self.name = name
+        self.last_index = None
+        self.last_capture_time = None
+        self.error = None
+        self._width, self._height = max(2, w & ~1), h
+        self._pacer = FramePacer(rate)
+        self._stop_after = stop_after
+        self._fail_every = fail_every
+        self._frames = 0
+        self._reads = 0
+        self._base = 0
+        self._grabbed = None
+        self._buf = None
+        self._state = _device_state((name, stop_after, unplugged_for, fail_every))
+        self._opened = not fail_open
+        if fail_open:
+            self.error = 'the device does not open (fail_open)'
+        elif self._state.unplugged_at is not None and not self._state.recovered:
+            away = _now() - self._state.unplugged_at
+            if unplugged_for is None or away < unplugged_for:
+                self._opened = False
+                self.error = 'the device is unplugged (stop_after=%d)' % stop_after
+                if unplugged_for is not None:
+                    self.error += ' and back in %.1f s' % (unplugged_for - away)
+            else:
+                self._state.recovered = True
+
+    def isOpened(self):  # noqa: N802 (OpenCV's name)
+        """Return True while the device is open (also after an unplug, as V4L2 does)."""
+        return self._opened
+
+    def release(self):
+        """Close the device; reads fail afterwards."""
+        self._opened = False
+        self._buf = None
+        self._grabbed = None
+
+    def _unplugged(self):
+        if (self._stop_after is None or self._state.recovered
+                or self._frames < self._stop_after):
+            return False
+        if self._state.unplugged_at is None:
+            self._state.unplugged_at = _now()
+        self.error = 'the device was unplugged after %d frames (stop_after)' % self._stop_after
+        return True
+
+    def grab(self):
+        """Wait for the next frame and capture it; False on a failed read."""
+        self._grabbed = None
+        if not self._opened or self._unplugged():
+            return False
+        starting = not self._pacer.running
+        number, due = self._pacer.wait()
+        if starting:
+            self._base = self._next_index(due)
+        index = self._base + number
+        self._state.last_index, self._state.last_time = index, due
+        self._reads += 1
+        if self._fail_every and self._reads % self._fail_every == 0:
+            return False
+        self._frames += 1
+        self._grabbed = index
+        self.last_index, self.last_capture_time = index, due
+        return True
+
+    def _next_index(self, start):
+        """Index of the first frame of a new schedule: the sequence goes on, gaps included."""
+        state = self._state
+        if state.last_index is None:
+            return 0
+        missed = int(round((start - state.last_time) * self._pacer.fps))
+        return state.last_index + max(1, missed)
+
+    def retrieve(self, image=None, flag=0):
+        """Return the grabbed frame as BGR (a new array each call)."""
+        if self._grabbed is None or not self._opened:
+            return False, None
+        layout = _layout(self._width, self._height)
+        fresh = self._buf is None or self._buf.shape != layout.background.shape
+        if fresh:
+            self._buf = layout.background.copy()
+        layout.render(self._grabbed, self._buf, fresh)
+        return True, yuyv_to_bgr(self._buf)
+
+    def read(self, image=None):
+        """Grab and retrieve: (True, BGR image) or (False, None)."""
+        if not self.grab():
+            return False, None
+        return self.retrieve()
+
+    def set(self, prop_id, value):  # noqa: A003 (OpenCV's name)
+        """Request width, height or fps like a V4L2 driver; other properties are refused."""
+        if not self._opened:
+            return False
+        prop_id = int(prop_id)
+        if prop_id in (cv2.CAP_PROP_FRAME_WIDTH, cv2.CAP_PROP_FRAME_HEIGHT):
+            size = _check_size(value)
+            if size is None:
+                return False
+            if prop_id == cv2.CAP_PROP_FRAME_WIDTH:
+                size = max(2, size & ~1)
+                changed, self._width = size != self._width, size
+            else:
+                changed, self._height = size != self._height, size
+        elif prop_id == cv2.CAP_PROP_FPS:
+            rate = _check_fps(value)
+            if rate is None:
+                return False
+            changed = rate != self._pacer.fps
+            self._pacer.fps = rate
+        else:
+            return False
+        if changed:
+            self._pacer.restart()
+        return True
+
+    def get(self, prop_id):
+        """Return the real width, height, fps, next frame index, FOURCC or last capture time."""
+        if not self._opened:
+            return 0.0
+        prop_id = int(prop_id)
+        if prop_id == cv2.CAP_PROP_FRAME_WIDTH:
+            return float(self._width)
+        if prop_id == cv2.CAP_PROP_FRAME_HEIGHT:
+            return float(self._height)
+        if prop_id == cv2.CAP_PROP_FPS:
+            return float(self._pacer.fps)
+        if prop_id == cv2.CAP_PROP_FOURCC:
+            return FOURCC_YUYV
+        if prop_id == cv2.CAP_PROP_POS_FRAMES:
+            if self._pacer.running:
+                return float(self._base + self._pacer.next)
+            last = self._state.last_index
+            return 0.0 if last is None else float(last + 1)
+        if prop_id == cv2.CAP_PROP_POS_MSEC:
+            return 0.0 if self.last_capture_time is None else self.last_capture_time * 1000.0
+        return 0.0
+
+
+def _parse_bool(key, text):
+    lowered = text.lower()
+    if lowered in ('1', 'true'):
+        return True
+    if lowered in ('0', 'false'):
+        return False
+    raise ValueError('%s must be 0, 1, true or false, got "%s"' % (key, text))
+
+
+def _parse_number(key, text, kind, minimum):
+    try:
+        value = kind(text)
+    except ValueError:
+        value = None
+    if value is None or not math.isfinite(value) or value < minimum:
+        raise ValueError('%s must be %s >= %s, got "%s"'
+                         % (key, 'an integer' if kind is int else 'a number', minimum, text))
+    return value
+
+
+def parse_synthetic_spec(spec):
+    """Return the SyntheticCamera fault options a ``synthetic?key=value&...`` string asks for."""
+    base, _, query = spec.partition('?')
+    if base != 'synthetic':
+        raise ValueError('"%s" is not a synthetic device (synthetic or synthetic?key=value)'
+                         % spec)
+    options = {}
+    for key, value in parse_qsl(query, keep_blank_values=True):
+        if key in options:
+            raise ValueError('option %s is given twice' % key)
+        if key == 'fail_open':
+            options[key] = _parse_bool(key, value)
+        elif key in ('stop_after', 'fail_every'):
+            options[key] = _parse_number(key, value, int, 0 if key == 'stop_after' else 1)
+        elif key == 'unplugged_for':
+            options[key] = _parse_number(key, value, float, 0)
+        else:
+            raise ValueError('unknown option "%s"; use synthetic?key=value&key=value with keys: %s'
+                             % (key, _OPTIONS))
+    if query and not options:
+        raise ValueError('cannot read options "%s"; use key=value&key=value with keys: %s'
+                         % (query, _OPTIONS))
+    return options
+
+
+def is_synthetic_spec(video_device):
+    """Return True if a video_device string names the synthetic source."""
+    return video_device == 'synthetic' or video_device.startswith('synthetic?')
+
+
+def open_synthetic(spec, width, height, fps):
+    """
+    Open the synthetic camera a video_device string names; ValueError if the string is bad.
+
+    The whole string names the device, so reopening it finds the same frame sequence and
+    unplug state.
+    """
+    options = parse_synthetic_spec(spec)
+    return SyntheticCamera(width, height, fps, name=spec, **options)
