@@ -103,7 +103,9 @@ class VideoSubscriber(Node):
             image = self.bridge_.imgmsg_to_cv2(msg)
             shown = image if msg.encoding == 'bgr8' else None
             if shown is None and (self.window is not None or self.viewer is not None):
-                shown = cvtColorForDisplay(image, msg.encoding, 'bgr8')
+                # Depth and other float images are scaled to their range, as image viewers do.
+                shown = cvtColorForDisplay(image, msg.encoding, 'bgr8',
+                                           do_dynamic_scaling=image.dtype.kind == 'f')
         except CvBridgeError as error:
             self._bad_message(msg, error)
             return

@@ -1,0 +1,577 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+A pure-Python (numpy + OpenCV) replacement for ROS 2's ``cv_bridge`` Python module.
+
+``from py_vision.cv_bridge import CvBridge, CvBridgeError`` gives the API rclpy programs know:
+``imgmsg_to_cv2``, ``cv2_to_imgmsg``, ``compressed_imgmsg_to_cv2``, ``cv2_to_compressed_imgmsg``,
+the encoding helpers, and the module-level ``getCvType`` and ``cvtColorForDisplay``.
+
+Differences from upstream, all on the side of saying what is wrong instead of crashing or
+returning a wrong image: every failure is a ``CvBridgeError`` (a ``TypeError``) naming the
+problem; a malformed message (short or long data, a step smaller than a row) is rejected; and
+``imgmsg_to_cv2`` returns a view of the message data (no copy) whenever it can, and a writable
+copy when the data is read-only (``bytes``) or must be byte-swapped or converted.
+"""
+
+import array
+import struct
+import sys
+
+import cv2
+import numpy as np
+
+from sensor_msgs.msg import CompressedImage, Image
+from std_msgs.msg import Header
+
+__all__ = ['CvBridge', 'CvBridgeError', 'cvtColorForDisplay', 'getCvType']
+
+
+class CvBridgeError(TypeError):
+    """Raised by the bridge for anything it cannot convert; the message says why."""
+
+
+# --- encoding tables, built once at import ------------------------------------------------
+
+_DEPTH_DTYPES = {'8U': 'uint8', '8S': 'int8', '16U': 'uint16', '16S': 'int16', '32S': 'int32',
+                 '32F': 'float32', '64F': 'float64'}
+_DTYPE_DEPTHS = {(np.dtype(v).kind, np.dtype(v).itemsize): k for k, v in _DEPTH_DTYPES.items()}
+
+# OpenCV's type numbers changed between 4.x and 5.x, so they are read from the running cv2.
+_CVTYPE_NAMES = {getattr(cv2, 'CV_%sC%d' % (d, c)): '%sC%d' % (d, c)
+                 for d in _DEPTH_DTYPES for c in (1, 2, 3, 4)}
+_CVTYPES = {name: cvtype for cvtype, name in _CVTYPE_NAMES.items()}
+
+_GRAY, _RGB, _BGR, _RGBA, _BGRA = 'GRAY', 'RGB', 'BGR', 'RGBA', 'BGRA'
+_UYVY, _YUY2 = 'YUV422', 'YUV422_YUY2'
+_BAYERS = ('RGGB', 'BGGR', 'GBRG', 'GRBG')
+
+
+class _Encoding:
+    """What the bridge knows about one encoding string."""
+
+    __slots__ = ('name', 'depth', 'dtype', 'channels', 'family', 'bits', 'cvtype_name',
+                 'cvtype', 'pixel_bytes')
+
+    def __init__(self, name, depth, channels, family):
+        self.name = name
+        self.depth = depth
+        self.dtype = np.dtype(_DEPTH_DTYPES[depth])
+        self.channels = channels
+        # The colour layout (None for the generic 8UC3-style encodings, which carry none).
+        self.family = family
+        self.bits = self.dtype.itemsize * 8
+        self.cvtype_name = '%sC%d' % (depth, channels)
+        self.cvtype = _CVTYPES[self.cvtype_name]
+        self.pixel_bytes = self.dtype.itemsize * channels
+
+
+def _build_encodings():
+    table = {}
+    for depth in _DEPTH_DTYPES:
+        for channels in (1, 2, 3, 4):
+            name = '%sC%d' % (depth, channels)
+            table[name] = _Encoding(name, depth, channels, None)
+    for bits, depth in ((8, '8U'), (16, '16U')):
+        table['mono%d' % bits] = _Encoding('mono%d' % bits, depth, 1, _GRAY)
+        for family, channels in ((_RGB, 3), (_BGR, 3), (_RGBA, 4), (_BGRA, 4)):
+            name = '%s%d' % (family.lower(), bits)
+            table[name] = _Encoding(name, depth, channels, family)
+        for pattern in _BAYERS:
+            name = 'bayer_%s%d' % (pattern.lower(), bits)
+            table[name] = _Encoding(name, depth, 1, 'BAYER_' + pattern)
+    # 'uyvy' and 'yuyv' are the newer sensor_msgs names of the same two layouts.
+    for name, family in (('yuv422', _UYVY), ('uyvy', _UYVY),
+                         ('yuv422_yuy2', _YUY2), ('yuyv', _YUY2)):
+        table[name] = _Encoding(name, '8U', 2, family)
+    return table
+
+
+_ENCODINGS = _build_encodings()
+
+
+def _cv_code(name):
+    return getattr(cv2, 'COLOR_' + name, None)
+
+
+def _build_conversions():
+    """Map (source family, destination family) to the cv2.cvtColor code (None: same layout)."""
+    codes = {}
+    plain = (_GRAY, _RGB, _BGR, _RGBA, _BGRA)
+    for src in plain + (_UYVY, _YUY2):
+        codes[(src, src)] = None
+    for src in plain:
+        for dst in plain:
+            if src != dst:
+                codes[(src, dst)] = _cv_code('%s2%s' % (src, dst))
+    for family, suffix in ((_UYVY, 'UYVY'), (_YUY2, 'YUY2')):
+        for dst in plain:
+            codes[(family, dst)] = _cv_code('YUV2%s_%s' % (dst, suffix))
+    # OpenCV names a Bayer pattern after the 2x2 block starting at pixel (1, 1).
+    opencv_names = {'RGGB': 'BG', 'BGGR': 'RG', 'GBRG': 'GR', 'GRBG': 'GB'}
+    for pattern, cv_name in opencv_names.items():
+        for dst in plain:
+            code = _cv_code('Bayer%s2%s' % (cv_name, dst))
+            if code is not None:
+                codes[('BAYER_' + pattern, dst)] = code
+    return codes
+
+
+_CONVERSIONS = _build_conversions()
+_PLANS = {}
+_NATIVE_BIG = sys.byteorder == 'big'
+
+
+def _encoding(name):
+    try:
+        return _ENCODINGS[name]
+    except (KeyError, TypeError):
+        raise CvBridgeError('Unrecognized image encoding [%s]' % (name,)) from None
+
+
+def _plan(src, dst):
+    """Return the steps from encoding src to dst: ('cvt', code) and ('depth', alpha) tuples."""
+    key = (src.name, dst.name)
+    plan = _PLANS.get(key)
+    if plan is not None:
+        return plan
+    alpha = 1.0
+    if src.bits == 8 and dst.bits == 16:
+        alpha = 65535.0 / 255.0
+    elif src.bits == 16 and dst.bits == 8:
+        alpha = 255.0 / 65535.0
+    if src.family is None or dst.family is None:
+        if src.family is None and dst.family is not None:
+            raise CvBridgeError('[%s] is not a color format but [%s] is: the conversion does '
+                                'not make sense' % (src.name, dst.name))
+        if src.channels != dst.channels:
+            raise CvBridgeError('[%s] and [%s] do not have the same number of channels (%d and '
+                                '%d)' % (src.name, dst.name, src.channels, dst.channels))
+        plan = (('depth', alpha),)
+    else:
+        pair = (src.family, dst.family)
+        if pair not in _CONVERSIONS:
+            raise CvBridgeError('Unsupported conversion from [%s] to [%s]' % (src.name, dst.name))
+        code = _CONVERSIONS[pair]
+        plan = (('depth', alpha),) if code is None else (('cvt', code), ('depth', alpha))
+    _PLANS[key] = plan
+    return plan
+
+
+def _convert_depth(im, dtype, alpha):
+    """Do what cv::Mat::convertTo does: scale, round half to even, saturate."""
+    if im.dtype == dtype and alpha == 1.0:
+        return im
+    if im.dtype == np.uint8 and dtype == np.uint16 and alpha != 1.0:
+        out = im.astype(np.uint16)
+        out *= 257
+        return out
+    if im.dtype == np.uint16 and dtype == np.uint8 and alpha != 1.0:
+        # v * 255 / 65535 == v / 257, which is never exactly halfway, so this rounds exactly.
+        return ((im.astype(np.uint32) + 128) // 257).astype(np.uint8)
+    if dtype.kind == 'f':
+        if alpha == 1.0:
+            return im.astype(dtype)
+        return (im.astype(np.float64) * alpha).astype(dtype)
+    work = im.astype(np.float64)
+    if alpha != 1.0:
+        work *= alpha
+    if im.dtype.kind == 'f':
+        work[np.isnan(work)] = 0
+        np.rint(work, out=work)
+    info = np.iinfo(dtype)
+    np.clip(work, info.min, info.max, out=work)
+    return work.astype(dtype)
+
+
+def _convert(im, src, dst):
+    """Convert image im of encoding src to encoding dst, following cv_bridge's rules."""
+    for step, value in _plan(src, dst):
+        if step == 'cvt':
+            try:
+                im = cv2.cvtColor(im, value)
+            except cv2.error as exc:
+                raise CvBridgeError('OpenCV cannot convert a %dx%d [%s] image to [%s]: %s' % (
+                    im.shape[1], im.shape[0], src.name, dst.name,
+                    str(exc).strip().splitlines()[-1])) from None
+        else:
+            im = _convert_depth(im, dst.dtype, value)
+    return im
+
+
+def _byte_buffer(data):
+    """Return the bytes of a message's data field as a 1-D uint8 array, a view when possible."""
+    if isinstance(data, (bytes, bytearray)) or (
+            isinstance(data, array.array) and data.itemsize == 1):
+        return np.frombuffer(data, np.uint8)
+    if isinstance(data, memoryview):
+        if data.c_contiguous:
+            return np.frombuffer(data, np.uint8)
+        data = np.array(data)
+    if isinstance(data, np.ndarray) and data.dtype == np.uint8:
+        return data.reshape(-1)
+    if isinstance(data, (str, bytes)) or not hasattr(data, '__len__'):
+        raise CvBridgeError('Image data must be a sequence of bytes, not %s'
+                            % type(data).__name__)
+    try:
+        values = np.asarray(data)
+    except (TypeError, ValueError) as exc:
+        raise CvBridgeError('Image data must be a sequence of bytes: %s' % exc) from None
+    if values.size == 0:
+        return np.empty(0, np.uint8)
+    if values.dtype.kind not in 'iub' or values.min() < 0 or values.max() > 255:
+        raise CvBridgeError('Image data must hold integers in [0, 255]')
+    return values.astype(np.uint8).reshape(-1)
+
+
+def _check_size(name, value):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise CvBridgeError('Image %s must be an integer, not %r' % (name, value))
+    if value <= 0:
+        raise CvBridgeError('Image %s is %d: the image is empty' % (name, value))
+    return int(value)
+
+
+def _image_from_msg(img_msg):
+    """Return (numpy image in native byte order, its _Encoding) for a sensor_msgs/Image."""
+    try:
+        encoding, height, width = img_msg.encoding, img_msg.height, img_msg.width
+        step, data, is_bigendian = img_msg.step, img_msg.data, img_msg.is_bigendian
+    except AttributeError as exc:
+        raise CvBridgeError('Expected a sensor_msgs/Image: %s' % exc) from None
+    enc = _encoding(encoding)
+    height = _check_size('height', height)
+    width = _check_size('width', width)
+    if isinstance(step, bool) or not isinstance(step, (int, np.integer)):
+        raise CvBridgeError('Image step must be an integer, not %r' % (step,))
+    row = width * enc.pixel_bytes
+    if step < row:
+        raise CvBridgeError('Image is wrongly formed: step %d is smaller than a row of %d pixels '
+                            'of [%s] (%d bytes)' % (step, width, encoding, row))
+    itemsize = enc.dtype.itemsize
+    if step % itemsize:
+        raise CvBridgeError('Image is wrongly formed: step %d is not a multiple of the %d-byte '
+                            'element size of [%s]' % (step, itemsize, encoding))
+    buf = _byte_buffer(data)
+    if buf.size != height * step:
+        raise CvBridgeError('Image is wrongly formed: data has %d bytes but height x step is '
+                            '%d x %d = %d' % (buf.size, height, step, height * step))
+    swap = itemsize > 1 and bool(is_bigendian) != _NATIVE_BIG
+    dtype = enc.dtype.newbyteorder('S') if swap else enc.dtype
+    if enc.channels == 1:
+        shape, strides = (height, width), (step, itemsize)
+    else:
+        shape = (height, width, enc.channels)
+        strides = (step, enc.pixel_bytes, itemsize)
+    im = np.ndarray(shape, dtype=dtype, buffer=buf, strides=strides)
+    if swap:
+        im = im.astype(enc.dtype)
+    elif not (im.flags.writeable and im.flags.aligned):
+        # A read-only source (bytes) or an odd address: copy, so callers can draw on the image.
+        im = im.copy()
+    return im, enc
+
+
+def _array_encoding(cvim):
+    """Return the generic encoding ('8UC3', ...) of a numpy image, or raise CvBridgeError."""
+    if not isinstance(cvim, np.ndarray):
+        raise CvBridgeError('Your input type is not a numpy array but %s' % type(cvim).__name__)
+    if cvim.ndim == 2:
+        channels = 1
+    elif cvim.ndim == 3:
+        channels = cvim.shape[2]
+    else:
+        raise CvBridgeError('An image must have 2 or 3 dimensions (rows, columns[, channels]), '
+                            'this array has shape %s' % (cvim.shape,))
+    depth = _DTYPE_DEPTHS.get((cvim.dtype.kind, cvim.dtype.itemsize))
+    if depth is None:
+        raise CvBridgeError('No image encoding has the numpy type %s (use uint8, int8, uint16, '
+                            'int16, int32, float32 or float64)' % cvim.dtype)
+    if not 1 <= channels <= 4:
+        raise CvBridgeError('No image encoding has %d channels (shape %s)'
+                            % (channels, cvim.shape))
+    if cvim.shape[0] == 0 or cvim.shape[1] == 0:
+        raise CvBridgeError('The image is empty (shape %s)' % (cvim.shape,))
+    return _ENCODINGS['%sC%d' % (depth, channels)]
+
+
+def _copy_header(header):
+    try:
+        copy = Header(frame_id=header.frame_id)
+        copy.stamp.sec = header.stamp.sec
+        copy.stamp.nanosec = header.stamp.nanosec
+    except (AttributeError, AssertionError, TypeError) as exc:
+        raise CvBridgeError('header must be a std_msgs/Header: %s' % exc) from None
+    return copy
+
+
+def _fill_data(msg, cvim):
+    """
+    Copy the pixels of cvim, row after row, into msg.data with one copy.
+
+    The message's own (empty) array.array is filled in place: rclpy's data setter copies its
+    argument again unless ROS_PYTHON_CHECK_FIELDS=1, which doubles the cost of a frame.
+    """
+    data = msg.data
+    if not isinstance(data, array.array) or data.typecode != 'B' or len(data):
+        data = array.array('B')
+        msg.data = data
+        data = msg.data
+    if not cvim.flags.c_contiguous:
+        cvim = np.ascontiguousarray(cvim)
+    data.frombytes(cvim.reshape(-1).view(np.uint8))
+
+
+# --- compressed images ----------------------------------------------------------------
+
+_DECODED_ENCODINGS = {(1, 8): 'mono8', (1, 16): 'mono16', (3, 8): 'bgr8', (3, 16): 'bgr16',
+                      (4, 8): 'bgra8', (4, 16): 'bgra16'}
+_DEPTH_HEADER = struct.Struct('<iff')
+
+
+def _decode_compressed(msg):
+    """Return (numpy image, encoding name) for a sensor_msgs/CompressedImage."""
+    try:
+        fmt, data = msg.format, msg.data
+    except AttributeError as exc:
+        raise CvBridgeError('Expected a sensor_msgs/CompressedImage: %s' % exc) from None
+    buf = _byte_buffer(data)
+    if buf.size == 0:
+        raise CvBridgeError('CompressedImage has no data (format %r)' % (fmt,))
+    fmt = str(fmt)
+    if 'compresseddepth' in fmt.lower():
+        return _decode_compressed_depth(fmt, buf)
+    im = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED)
+    if im is None:
+        raise CvBridgeError('Could not decode the %d bytes of a CompressedImage with format %r'
+                            % (buf.size, fmt))
+    channels = 1 if im.ndim == 2 else im.shape[2]
+    name = _DECODED_ENCODINGS.get((channels, im.dtype.itemsize * 8))
+    if name is None:
+        name = _array_encoding(im).name
+    return im, name
+
+
+def _decode_compressed_depth(fmt, buf):
+    """Decode image_transport's compressedDepth format (a 12-byte header, then a PNG)."""
+    original = fmt.split(';')[0].strip()
+    if buf.size <= _DEPTH_HEADER.size:
+        raise CvBridgeError('compressedDepth data is too short (%d bytes)' % buf.size)
+    _, quant_a, quant_b = _DEPTH_HEADER.unpack(buf[:_DEPTH_HEADER.size].tobytes())
+    im = cv2.imdecode(buf[_DEPTH_HEADER.size:], cv2.IMREAD_UNCHANGED)
+    if im is None or im.dtype != np.uint16 or im.ndim != 2:
+        raise CvBridgeError('Could not decode compressedDepth data with format %r' % (fmt,))
+    if original == '32FC1':
+        inv = im.astype(np.float32)
+        with np.errstate(divide='ignore'):
+            depth = np.float32(quant_a) / (inv - np.float32(quant_b))
+        depth[im == 0] = np.nan
+        return depth, '32FC1'
+    return im, original if original in ('16UC1', 'mono16') else '16UC1'
+
+
+# --- the bridge -----------------------------------------------------------------------
+
+
+class CvBridge:
+    """Convert between ROS sensor_msgs/Image (and CompressedImage) and numpy/OpenCV images."""
+
+    # The lookup tables upstream exposes as instance attributes.
+    cvtype_to_name = dict(_CVTYPE_NAMES)
+    numpy_type_to_cvtype = dict(list({v: k for k, v in _DEPTH_DTYPES.items()}.items())
+                                + list(_DEPTH_DTYPES.items()))
+    cvdepth_to_numpy_depth = {getattr(cv2, 'CV_' + d): v for d, v in _DEPTH_DTYPES.items()}
+
+    def dtype_with_channels_to_cvtype2(self, dtype, n_channels):
+        """Return the OpenCV type name ('8UC3', ...) of a numpy dtype and channel count."""
+        try:
+            dtype = np.dtype(dtype)
+        except TypeError:
+            raise CvBridgeError('%r is not a numpy dtype' % (dtype,)) from None
+        depth = _DTYPE_DEPTHS.get((dtype.kind, dtype.itemsize))
+        name = '%sC%s' % (depth, n_channels)
+        if depth is None or name not in _CVTYPES:
+            raise CvBridgeError('No OpenCV type for numpy %s with %s channels'
+                                % (dtype, n_channels))
+        return name
+
+    def cvtype2_to_dtype_with_channels(self, cvtype):
+        """Return (numpy dtype name, channels) of an OpenCV type number such as cv2.CV_8UC3."""
+        name = _CVTYPE_NAMES.get(cvtype)
+        if name is None:
+            raise CvBridgeError('Unrecognized OpenCV type %r' % (cvtype,))
+        depth, channels = name.split('C')
+        return _DEPTH_DTYPES[depth], int(channels)
+
+    def encoding_to_cvtype2(self, encoding):
+        """Return the OpenCV type number of an image encoding."""
+        return getCvType(encoding)
+
+    def encoding_to_dtype_with_channels(self, encoding):
+        """Return (numpy dtype name, channels) of an image encoding, e.g. ('uint8', 3)."""
+        enc = _encoding(encoding)
+        return enc.dtype.name, enc.channels
+
+    def imgmsg_to_cv2(self, img_msg, desired_encoding='passthrough'):
+        """
+        Convert a sensor_msgs/Image to a numpy image.
+
+        With ``desired_encoding`` 'passthrough' (or the message's own encoding) the result is a
+        view of the message data, in native byte order; otherwise it is converted as cv_bridge
+        does (colour order, alpha, mono, 8/16-bit scaling, Bayer and YUV 4:2:2 to colour).
+        One-channel images have two dimensions. Raises CvBridgeError when the message is
+        malformed or the conversion is not possible.
+        """
+        im, enc = _image_from_msg(img_msg)
+        if desired_encoding in ('passthrough', '', enc.name):
+            return im
+        return _convert(im, enc, _encoding(desired_encoding))
+
+    def cv2_to_imgmsg(self, cvim, encoding='passthrough', header=None):
+        """
+        Convert a numpy image to a sensor_msgs/Image holding a copy of its pixels.
+
+        With 'passthrough' the encoding is the array's OpenCV type ('8UC3', '16UC1', ...);
+        otherwise ``encoding`` must have the array's type and channel count. ``header`` (a
+        std_msgs/Header) is copied into the message.
+        """
+        array_enc = _array_encoding(cvim)
+        if encoding == 'passthrough':
+            name = array_enc.name
+        else:
+            enc = _encoding(encoding)
+            if enc.cvtype_name != array_enc.name:
+                raise CvBridgeError('encoding specified as %s, but image has incompatible type %s'
+                                    % (encoding, array_enc.name))
+            name = enc.name
+        img_msg = Image()
+        if header is not None:
+            img_msg.header = _copy_header(header)
+        img_msg.height, img_msg.width = int(cvim.shape[0]), int(cvim.shape[1])
+        img_msg.encoding = name
+        byteorder = cvim.dtype.byteorder
+        img_msg.is_bigendian = cvim.dtype.itemsize > 1 and (
+            byteorder == '>' or (byteorder == '=' and _NATIVE_BIG))
+        img_msg.step = img_msg.width * array_enc.pixel_bytes
+        _fill_data(img_msg, cvim)
+        return img_msg
+
+    def compressed_imgmsg_to_cv2(self, cmprs_img_msg, desired_encoding='passthrough'):
+        """
+        Decode a sensor_msgs/CompressedImage (jpeg, png, ... and compressedDepth).
+
+        'passthrough' returns the decoded image as OpenCV gives it (BGR order, or one channel
+        for a mono image); any other encoding converts from there.
+        """
+        im, name = _decode_compressed(cmprs_img_msg)
+        if desired_encoding in ('passthrough', '', name):
+            return im
+        return _convert(im, _ENCODINGS[name], _encoding(desired_encoding))
+
+    def cv2_to_compressed_imgmsg(self, cvim, dst_format='jpg', header=None):
+        """Compress a numpy image (BGR order) into a sensor_msgs/CompressedImage."""
+        _array_encoding(cvim)
+        fmt = str(dst_format).lstrip('.')
+        try:
+            ok, buf = cv2.imencode('.' + fmt, cvim)
+        except cv2.error as exc:
+            raise CvBridgeError('OpenCV cannot encode a %s %s image as %r: %s' % (
+                cvim.shape, cvim.dtype, dst_format,
+                str(exc).strip().splitlines()[-1])) from None
+        if not ok:
+            raise CvBridgeError('OpenCV could not encode the image as %r' % (dst_format,))
+        msg = CompressedImage()
+        if header is not None:
+            msg.header = _copy_header(header)
+        msg.format = fmt
+        _fill_data(msg, buf)
+        return msg
+
+
+def getCvType(encoding):
+    """Return the OpenCV type number (e.g. cv2.CV_8UC3) of an image encoding."""
+    return _encoding(encoding).cvtype
+
+
+# --- display --------------------------------------------------------------------------
+
+
+def _label_colors(count=64):
+    """Return a BGR lookup table of well separated colours for label images."""
+    hues = (np.arange(count) * 0.6180339887 % 1.0 * 180).astype(np.uint8)
+    sat = np.where(np.arange(count) % 2, 200, 255).astype(np.uint8)
+    val = np.where(np.arange(count) % 3 == 2, 180, 255).astype(np.uint8)
+    hsv = np.stack([hues, sat, val], axis=1).reshape(1, count, 3)
+    return cv2.cvtColor(hsv, cv2.COLOR_HSV2BGR).reshape(count, 3)
+
+
+_LABEL_COLORS = _label_colors()
+_DISPLAY_GUESS = {'8UC1': 'mono8', '8UC3': 'bgr8', '8UC4': 'bgra8',
+                  '16UC1': 'mono16', '16UC3': 'bgr16', '16UC4': 'bgra16'}
+
+
+def cvtColorForDisplay(source, encoding_in='', encoding_out='', do_dynamic_scaling=False,
+                       min_image_value=0.0, max_image_value=0.0, colormap=-1, bg_label=-1):
+    """
+    Return an 8-bit image of ``source`` fit for display (bgr8 unless ``encoding_out`` says).
+
+    ``encoding_in`` names the encoding of ``source`` (guessed from the array when empty).
+    ``do_dynamic_scaling`` maps the image's finite min..max to 0..255; otherwise a
+    ``min_image_value`` different from ``max_image_value`` maps that range (one-channel images
+    only), through the OpenCV ``colormap`` when it is not -1. A 32SC1 image shown as bgr8 is a
+    label image: one colour per label, black for ``bg_label``. Float and other non-colour
+    images need scaling; without it a CvBridgeError says so.
+    """
+    src = _array_encoding(source) if not encoding_in else _encoding(encoding_in)
+    got = _array_encoding(source)
+    if got.cvtype_name != src.cvtype_name:
+        raise CvBridgeError('cvtColorForDisplay: the image is %s but encoding_in [%s] needs %s'
+                            % (got.name, src.name, src.cvtype_name))
+    out = _encoding(encoding_out) if encoding_out else _ENCODINGS['bgr8']
+    if out.family not in (_GRAY, _RGB, _BGR, _RGBA, _BGRA) or out.bits != 8:
+        raise CvBridgeError('cvtColorForDisplay: the output encoding [%s] must be an 8-bit '
+                            'color or mono encoding' % out.name)
+    if src.name == '32SC1' and out.name == 'bgr8':
+        labels = source.astype(np.int64)
+        result = _LABEL_COLORS[labels % len(_LABEL_COLORS)]
+        result[labels == bg_label] = 0
+        return result
+    if do_dynamic_scaling:
+        finite = source[np.isfinite(source)] if source.dtype.kind == 'f' else source
+        if finite.size == 0 or finite.min() == finite.max():
+            shape = source.shape[:2] if out.channels == 1 else source.shape[:2] + (out.channels,)
+            return np.full(shape, 128, np.uint8)
+        min_image_value, max_image_value = float(finite.min()), float(finite.max())
+    if min_image_value != max_image_value:
+        if src.channels != 1:
+            raise CvBridgeError('cvtColorForDisplay: scaling is only supported for one-channel '
+                                'images, [%s] has %d' % (src.name, src.channels))
+        scaled = (source.astype(np.float64) - min_image_value) * (
+            255.0 / (max_image_value - min_image_value))
+        scaled = _convert_depth(scaled, np.dtype(np.uint8), 1.0)
+        if colormap != -1:
+            return _convert(cv2.applyColorMap(scaled, colormap), _ENCODINGS['bgr8'], out)
+        return _convert(scaled, _ENCODINGS['mono8'], out)
+    typed = _ENCODINGS[_DISPLAY_GUESS.get(src.name, src.name)]
+    if typed.name == out.name:
+        return source
+    try:
+        return _convert(source, typed, out)
+    except CvBridgeError as exc:
+        raise CvBridgeError('cvtColorForDisplay: cannot show a [%s] image as [%s] (%s); for '
+                            'depth or float images pass do_dynamic_scaling=True or a '
+                            'min_image_value/max_image_value range' % (src.name, out.name, exc)
+                            ) from None
