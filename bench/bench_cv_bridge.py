@@ -108,8 +108,8 @@ def main():
     print('| size | case | median | x numpy copy (median of per-round ratios) |')
     print('|---|---|---:|---:|')
     for row in rows:
-        print('| %s | %s | %.1f us | %.2f |' % (row['size'], row['case'], row['median_us'],
-                                              row['vs_numpy_copy']))
+        print('| %s | %s | %.1f us | %.2f |' % (
+            row['size'], row['case'], row['median_us'], row['vs_numpy_copy']))
     result = {'python': platform.python_version(), 'numpy': np.__version__,
               'opencv': cv2.__version__, 'machine': platform.machine(), 'rows': rows}
     out = REPO / 'bench' / 'results' / 'cv_bridge.json'

@@ -55,7 +55,7 @@ class ImageSubscription:
     publishers come and go, and available on Humble too.
     """
 
-    def __init__(self, node, msg_type, topic, callback, depth=5, check_period=0.5):
+    def __init__(self, node, msg_type, topic, callback, depth=10, check_period=0.5):
         self._node = node
         self._args = (msg_type, topic, callback)
         self._depth = depth

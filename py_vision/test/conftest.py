@@ -30,6 +30,8 @@ if not ros_harness.SITE_PACKAGES.is_dir():
     raise pytest.UsageError('%s is missing: build the package first (scripts/setup.sh)'
                             % ros_harness.SITE_PACKAGES)
 sys.path.insert(0, str(ros_harness.SITE_PACKAGES))
+# As after `source install/setup.bash`, for code that looks itself up through the ament index.
+os.environ['AMENT_PREFIX_PATH'] = ros_harness.installed_env()['AMENT_PREFIX_PATH']
 
 
 @pytest.fixture

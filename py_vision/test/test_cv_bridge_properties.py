@@ -13,7 +13,7 @@
 # limitations under the License.
 
 
-"""Property tests of py_vision.cv_bridge: round trips survive, bad messages only raise CvBridgeError."""
+"""Property tests of py_vision.cv_bridge: round trips survive, bad input raises CvBridgeError."""
 
 import array
 
@@ -126,8 +126,8 @@ def test_malformed_messages_only_raise_bridge_errors(msg, desired):
 
 
 @SETTINGS
-@given(st.binary(max_size=200), st.sampled_from(['jpeg', 'png', 'bgr8; jpeg compressed bgr8',
-                                                  '16UC1; compressedDepth png']))
+@given(st.binary(max_size=200), st.sampled_from([
+    'jpeg', 'png', 'bgr8; jpeg compressed bgr8', '16UC1; compressedDepth png']))
 def test_garbage_compressed_data_only_raises_bridge_errors(raw, fmt):
     msg = CompressedImage(format=fmt)
     msg.data = array.array('B', raw)

@@ -108,7 +108,7 @@ def malformed_images(count, seed=7):
         msg.height, msg.width = rng.choice([(4, 4), (48, 64), (0, 10), (10, 0), (70000, 3)])
         msg.encoding = rng.choice(['bgr8', 'mono16', '', 'nonsense', '32FC1', 'rgb8'])
         bpp = {'bgr8': 3, 'rgb8': 3, 'mono16': 2, '32FC1': 4}.get(msg.encoding, 1)
-        msg.step = rng.choice([msg.width * bpp, msg.width * bpp - 1, 0, 7])
+        msg.step = max(0, rng.choice([msg.width * bpp, msg.width * bpp - 1, 0, 7]))
         size = msg.height * msg.step + rng.choice([-5, -1, 1, 13]) if i % 5 else 0
         msg.data = bytes(rng.getrandbits(8) for _ in range(max(0, min(size, 4096))))
         msg.is_bigendian = rng.choice([0, 1])
@@ -272,6 +272,14 @@ def test_two_hosts_over_a_veth_pair(ros_env, domain_id, tmp_path):
             ip('-n', ns, 'addr', 'add', hosts[ns] + '/24', 'dev', dev)
             ip('-n', ns, 'link', 'set', dev, 'up')
             ip('-n', ns, 'link', 'set', 'lo', 'up')
+
+        def link_up(ns, dev):
+            state = subprocess.run(['ip', '-n', ns, '-o', 'link', 'show', 'dev', dev],
+                                   capture_output=True, text=True).stdout
+            return 'state UP' in state
+        # Fast DDS picks its interfaces at start-up: the veth must be up before the nodes are.
+        for ns, dev in zip(hosts, veth):
+            wait_until(lambda: link_up(ns, dev), 10, what='%s up in %s' % (dev, ns))
         env = dict(ros_env, ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET')
 
         def in_host(ns, cmd, log):
@@ -292,8 +300,9 @@ def test_two_hosts_over_a_veth_pair(ros_env, domain_id, tmp_path):
             procs[0].wait(60)
         except subprocess.TimeoutExpired:
             publisher_log.seek(0)
-            raise AssertionError('no 30 frames across the veth pair in 60 s:\n%s'
-                                 % publisher_log.read())
+            checker_log.seek(0)
+            raise AssertionError('no 30 frames across the veth pair in 60 s:\n%s\n%s' % (
+                publisher_log.read(), checker_log.read()))
         checker_log.seek(0)
         result = json.loads(checker_log.read().strip().splitlines()[-1])
         assert result['frames'] == 30 and result['intact'] == 30, result

@@ -1,0 +1,62 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+What the benchmark's helper processes share: stop on a signal, write results.
+
+Each helper (bare publisher and subscriber, instrumented py_vision nodes) records one event per
+frame in memory and writes them as JSON to the file named by its caller when it stops.
+"""
+
+import json
+import os
+import signal
+import threading
+import time
+
+
+FIRST_FRAME_MARK = 'BENCH first frame'
+
+
+class StopFlag:
+    """Set by SIGINT or SIGTERM, so that a process can write its results before it exits."""
+
+    def __init__(self):
+        self.event = threading.Event()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, self._handle)
+
+    def _handle(self, signum, frame):
+        self.event.set()
+
+    def is_set(self):
+        return self.event.is_set()
+
+
+def write_json(path, data):
+    """Write data to path atomically (the caller polls for the file)."""
+    tmp = path + '.tmp'
+    with open(tmp, 'w') as stream:
+        json.dump(data, stream)
+    os.replace(tmp, path)
+
+
+def announce_first_frame():
+    """Tell the benchmark (which reads this process' output) that frames are arriving."""
+    print(FIRST_FRAME_MARK, flush=True)
+
+
+def monotonic():
+    """Return the time every helper records events with (system-wide, also in namespaces)."""
+    return time.monotonic()

@@ -1,0 +1,550 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The browser viewer: live images over HTTP, with the standard library only (no ROS here).
+
+Routes, and nothing else (no file is ever served from disk):
+
+- ``GET /``             a self-contained page: the live video and the live stats
+- ``GET /stream``       MJPEG (``multipart/x-mixed-replace``), always the newest frame
+- ``GET /snapshot.jpg`` the newest frame as one JPEG (503 until the first frame arrives)
+- ``GET /stats``        the stats given to ``set_stats()`` plus the viewer's own, as JSON
+
+``submit()`` only stores a reference to the image and wakes the clients: a frame is encoded
+to JPEG once, when the first client wants it, and never when nobody watches. Every client has
+its own thread and always gets the newest frame, so a slow client skips frames instead of
+slowing the producer or the other clients. The number of video clients is bounded; further
+ones get a short 503 answer.
+"""
+
+import errno
+import html
+from http.server import BaseHTTPRequestHandler, HTTPServer
+import json
+import logging
+import math
+import select
+import socket
+from socketserver import ThreadingMixIn
+import threading
+import time
+
+import cv2
+import numpy as np
+
+_BOUNDARY = 'py_vision_frame'
+# A client that accepts no data for this long (it vanished or stalled) is dropped.
+_SOCKET_TIMEOUT = 10.0
+# How often an idle stream thread checks that its client is still there.
+_IDLE_CHECK = 1.0
+# Short requests (the page, /stats, snapshots) beyond the video clients: enough for every
+# tab's stats poll, small enough to bound the threads a misbehaving client can make us start.
+_EXTRA_CONNECTIONS = 16
+_WILDCARD_HOSTS = ('', '0.0.0.0', '::')
+
+
+class WebViewerError(Exception):
+    """The viewer cannot serve (the address is in use or unusable); the message says why."""
+
+
+class _ThrottledLog:
+    """One message per key and period at most, so a flood of events cannot flood the log."""
+
+    def __init__(self, logger, period=5.0):
+        self._logger = logger
+        self._period = period
+        self._last = {}
+        self._lock = threading.Lock()
+
+    def __call__(self, level, key, message):
+        now = time.monotonic()
+        with self._lock:
+            if now - self._last.get(key, -math.inf) < self._period:
+                return
+            self._last[key] = now
+        getattr(self._logger, level)(message)
+
+
+def _json_safe(value):
+    """Return value with numpy scalars made plain and non-finite floats made null."""
+    if isinstance(value, dict):
+        return {str(k): _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    return str(value)
+
+
+class _Server(ThreadingMixIn, HTTPServer):
+    """A threading HTTP server that counts, caps and can close its connections."""
+
+    daemon_threads = True
+    allow_reuse_address = True
+    request_queue_size = 64  # a burst of connections waits in the kernel, not in SYN retries
+
+    def __init__(self, viewer, address, family):
+        self.viewer = viewer
+        self.address_family = family
+        super().__init__(address, _Handler)
+
+    def server_bind(self):
+        # HTTPServer.server_bind() resolves the host's FQDN, which can stall for seconds on a
+        # board without DNS; the name is not needed.
+        super(HTTPServer, self).server_bind()
+        self.server_name, self.server_port = self.server_address[:2]
+
+    def process_request(self, request, client_address):
+        if not self.viewer._open_connection(request):
+            try:
+                request.setblocking(False)
+                request.send(b'HTTP/1.1 503 Service Unavailable\r\nContent-Length: 0\r\n'
+                             b'Connection: close\r\n\r\n')
+            except OSError:
+                pass
+            super().shutdown_request(request)
+            return
+        super().process_request(request, client_address)
+
+    def shutdown_request(self, request):
+        self.viewer._close_connection(request)
+        super().shutdown_request(request)
+
+    def handle_error(self, request, client_address):
+        self.viewer._log_handler_error(client_address)
+
+
+class _Handler(BaseHTTPRequestHandler):
+    """Serves the four routes of one connection, then closes it."""
+
+    protocol_version = 'HTTP/1.1'
+    timeout = _SOCKET_TIMEOUT
+
+    def version_string(self):
+        return 'py_vision'
+
+    def do_GET(self):  # noqa: N802 (the name http.server looks for)
+        viewer = self.server.viewer
+        # The target as the client sent it (http.server folds a leading '//' in self.path);
+        # exact matches only: '//stream', '/stream/', '/../x', '/%2e%2e/' are all 404.
+        target = self.requestline.split()[1]
+        route = target.split('?', 1)[0].split('#', 1)[0]
+        if route == '/':
+            self._send(200, 'text/html; charset=utf-8', viewer._page)
+        elif route == '/stats':
+            body = json.dumps(viewer.stats(), sort_keys=True).encode()
+            self._send(200, 'application/json', body)
+        elif route == '/snapshot.jpg':
+            jpeg = viewer._latest_jpeg()[1]
+            if jpeg is None:
+                self._send(503, 'text/plain; charset=utf-8', b'No frame received yet.\n',
+                           [('Retry-After', '1')])
+            else:
+                self._send(200, 'image/jpeg', jpeg)
+        elif route == '/stream':
+            self._stream()
+        else:
+            self._send(404, 'text/plain; charset=utf-8', b'Not found.\n')
+
+    do_HEAD = do_GET  # noqa: N815 (same answers, _send() leaves the body out)
+
+    def send_error(self, code, message=None, explain=None):
+        # Replaces http.server's HTML error page (bad request line, unsupported method...).
+        text = '%d %s\n' % (code, message or self.responses.get(code, ('Error',))[0])
+        self._send(code, 'text/plain; charset=utf-8', text.encode())
+
+    def log_message(self, format, *args):  # noqa: A002 (http.server's signature)
+        pass  # one log line per request would bury the node's own log
+
+    def _headers(self, code, content_type, extra=()):
+        self.send_response(code)
+        self.send_header('Content-Type', content_type)
+        self.send_header('Cache-Control', 'no-store')
+        self.send_header('X-Content-Type-Options', 'nosniff')
+        self.send_header('Connection', 'close')
+        for name, value in extra:
+            self.send_header(name, value)
+
+    def _send(self, code, content_type, body, extra=()):
+        self.close_connection = True
+        self._headers(code, content_type, extra)
+        self.send_header('Content-Length', str(len(body)))
+        self.end_headers()
+        if self.command != 'HEAD':
+            self.wfile.write(body)
+
+    def _stream(self):
+        viewer = self.server.viewer
+        if not viewer._take_stream_slot():
+            viewer._throttled('warning', 'refused',
+                              'viewer: refused a video client from %s, %d are watching '
+                              '(the limit)' % (self.client_address[0], viewer.max_clients))
+            self._send(503, 'text/plain; charset=utf-8',
+                       b'Too many viewers are connected; close one and reload.\n',
+                       [('Retry-After', '5')])
+            return
+        try:
+            self.close_connection = True
+            self._headers(200, 'multipart/x-mixed-replace; boundary=' + _BOUNDARY,
+                          [('Pragma', 'no-cache')])
+            self.end_headers()
+            if self.command == 'HEAD':
+                return
+            # Each part is followed at once by the next boundary, which is what makes a browser
+            # show it now rather than when the next frame comes.
+            self.wfile.write(b'--%s\r\n' % _BOUNDARY.encode())
+            sent = 0
+            while True:
+                number = viewer._wait_newer(sent, _IDLE_CHECK)
+                if number is None:
+                    return  # the viewer is closing
+                if number == sent:
+                    if self._client_gone():
+                        return
+                    continue
+                sent, jpeg = viewer._latest_jpeg()
+                self.wfile.write(b'Content-Type: image/jpeg\r\nContent-Length: %d\r\n\r\n%s'
+                                 b'\r\n--%s\r\n' % (len(jpeg), jpeg, _BOUNDARY.encode()))
+        except (OSError, ValueError):
+            pass  # the client went away (reset, broken pipe, timeout) or the viewer closed
+        finally:
+            viewer._release_stream_slot()
+
+    def _client_gone(self):
+        """Return True when the peer closed its end (readable with nothing to read)."""
+        try:
+            poller = select.poll()  # unlike select.select(), fine with descriptors > 1023
+            poller.register(self.connection, select.POLLIN)
+            return bool(poller.poll(0)) and not self.connection.recv(1, socket.MSG_PEEK)
+        except (OSError, ValueError):
+            return True
+
+
+class WebViewer:
+    """Serve the newest submitted image to any number of browsers (up to max_clients)."""
+
+    def __init__(self, host='127.0.0.1', port=8080, *, max_clients=8, jpeg_quality=80,
+                 title='py_vision', logger=None):
+        if not 1 <= int(max_clients):
+            raise ValueError('max_clients must be at least 1, got %r' % max_clients)
+        if not 0 <= int(jpeg_quality) <= 100:
+            raise ValueError('jpeg_quality must be within 0..100, got %r' % jpeg_quality)
+        self.host = host
+        self.max_clients = int(max_clients)
+        self._requested_port = int(port)
+        self._jpeg_params = [cv2.IMWRITE_JPEG_QUALITY, int(jpeg_quality)]
+        self._logger = logger if logger is not None else logging.getLogger(__name__)
+        self._throttled = _ThrottledLog(self._logger)
+        self._page = _page(title)
+
+        self._frame_lock = threading.Condition()
+        self._frame = None
+        self._frame_number = 0
+        self._closing = False
+
+        self._encode_lock = threading.Lock()
+        self._jpeg = None
+        self._jpeg_number = 0
+        self._encoded = 0
+
+        self._lock = threading.Lock()  # guards what follows
+        self._stats = {}
+        self._connections = set()
+        self._streams = 0
+
+        self._server = None
+        self._thread = None
+
+    def start(self):
+        """Bind and serve in daemon threads; raise WebViewerError if the address is unusable."""
+        if self._server is not None:
+            return
+        family = socket.AF_INET6 if ':' in self.host else socket.AF_INET
+        try:
+            self._server = _Server(self, (self.host, self._requested_port), family)
+        except (OSError, OverflowError) as error:
+            reason = getattr(error, 'strerror', None) or str(error)
+            advice = 'choose another web_port'
+            if isinstance(error, socket.gaierror) or (
+                    getattr(error, 'errno', None) == errno.EADDRNOTAVAIL):
+                advice = 'web_host must be an address or name of this machine'
+            raise WebViewerError('cannot serve the browser viewer on %s:%d: %s; %s' % (
+                self.host, self._requested_port, reason, advice)) from None
+        self._thread = threading.Thread(target=self._server.serve_forever, args=(0.1,),
+                                        name='web_viewer', daemon=True)
+        self._thread.start()
+
+    @property
+    def port(self):
+        """Return the port really bound (the requested one, or the ephemeral one for port 0)."""
+        return self._server.server_address[1] if self._server else self._requested_port
+
+    @property
+    def url(self):
+        """Return the address to open in a browser; the host name when bound to all interfaces."""
+        host = socket.gethostname() if self.host in _WILDCARD_HOSTS else self.host
+        if ':' in host:
+            host = '[%s]' % host
+        return 'http://%s:%d/' % (host, self.port)
+
+    def submit(self, image):
+        """
+        Make image (uint8 BGR HxWx3 or mono HxW) the newest frame; it must not change later.
+
+        Costs O(1) whatever the clients do: no copy, no encoding, no waiting on sockets.
+        """
+        if not isinstance(image, np.ndarray):
+            raise ValueError('the viewer shows numpy images, got %s' % type(image).__name__)
+        if image.dtype != np.uint8 or not (
+                image.ndim == 2 or (image.ndim == 3 and image.shape[2] in (1, 3))):
+            raise ValueError('the viewer shows uint8 BGR (HxWx3) or mono (HxW) images, got %s %s'
+                             % (image.dtype, image.shape))
+        with self._frame_lock:
+            self._frame = image
+            self._frame_number += 1
+            self._frame_lock.notify_all()
+
+    def set_stats(self, stats):
+        """Set the JSON-able dict /stats and the page show (fps, latency, size, topic...)."""
+        with self._lock:
+            self._stats = dict(stats)
+
+    def stats(self):
+        """Return the stats last set plus the viewer's own counters, ready for JSON."""
+        with self._lock:
+            result = dict(self._stats)
+            result['clients'] = self._streams
+        result['encoded_frames'] = self._encoded
+        result['viewer_frames'] = self._frame_number
+        return _json_safe(result)
+
+    @property
+    def client_count(self):
+        """How many video clients (/stream) are connected now."""
+        with self._lock:
+            return self._streams
+
+    @property
+    def encoded_frames(self):
+        """How many frames were JPEG-encoded so far (at most one per submitted frame)."""
+        return self._encoded
+
+    def close(self):
+        """Stop serving, drop every client and release the port; safe to call twice."""
+        with self._frame_lock:
+            self._closing = True
+            self._frame_lock.notify_all()
+        server, self._server = self._server, None
+        if server is None:
+            return
+        server.shutdown()
+        server.server_close()
+        with self._lock:
+            connections = list(self._connections)
+        for connection in connections:
+            try:
+                connection.shutdown(socket.SHUT_RDWR)
+            except OSError:
+                pass
+        self._thread.join(1.0)
+
+    # What the request handlers use.
+
+    def _open_connection(self, connection):
+        with self._lock:
+            if self._closing or len(self._connections) >= self.max_clients + _EXTRA_CONNECTIONS:
+                return False
+            self._connections.add(connection)
+            return True
+
+    def _close_connection(self, connection):
+        with self._lock:
+            self._connections.discard(connection)
+
+    def _take_stream_slot(self):
+        with self._lock:
+            if self._streams >= self.max_clients:
+                return False
+            self._streams += 1
+            return True
+
+    def _release_stream_slot(self):
+        with self._lock:
+            self._streams -= 1
+
+    def _wait_newer(self, number, timeout):
+        """Wait for a frame newer than number; return the newest number (None when closing)."""
+        with self._frame_lock:
+            self._frame_lock.wait_for(
+                lambda: self._closing or self._frame_number != number, timeout)
+            return None if self._closing else self._frame_number
+
+    def _latest_jpeg(self):
+        """Return (number, JPEG bytes) of the newest frame, encoding it if nobody did yet."""
+        with self._encode_lock:
+            with self._frame_lock:
+                number, frame = self._frame_number, self._frame
+            if frame is None:
+                return 0, None
+            if number != self._jpeg_number:
+                ok, buffer = cv2.imencode('.jpg', frame, self._jpeg_params)
+                if not ok:
+                    raise ValueError('JPEG encoding failed for a %s frame' % (frame.shape,))
+                self._jpeg, self._jpeg_number = buffer.tobytes(), number
+                self._encoded += 1
+            return self._jpeg_number, self._jpeg
+
+    def _log_handler_error(self, client_address):
+        self._throttled('warning', 'handler',
+                        'viewer: a request from %s failed and was dropped' % (client_address[0],))
+
+
+def _page(title):
+    """Return the viewer page: one HTML document with inline CSS and JS, nothing external."""
+    return _PAGE.replace('{{title}}', html.escape(title)).encode()
+
+
+_PAGE = """<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<meta http-equiv="Content-Security-Policy" content="default-src 'none'; img-src 'self';
+ connect-src 'self'; style-src 'unsafe-inline'; script-src 'unsafe-inline'">
+<title>{{title}}</title>
+<style>
+  :root { color-scheme: dark; --fg: #e8eaed; --dim: #9aa0a6; --card: #202124;
+          --line: #3c4043; --ok: #81c995; --bad: #f28b82; }
+  * { box-sizing: border-box; }
+  body { margin: 0; background: #121212; color: var(--fg);
+         font: 14px/1.4 system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; }
+  header { display: flex; align-items: center; gap: 12px; padding: 10px 18px;
+           border-bottom: 1px solid var(--line); }
+  h1 { font-size: 17px; font-weight: 600; margin: 0; }
+  #status { margin-left: auto; font-size: 13px; color: var(--dim); }
+  #status::before { content: ""; display: inline-block; width: 9px; height: 9px;
+                    border-radius: 50%; margin-right: 6px; background: var(--dim); }
+  #status.live::before { background: var(--ok); }
+  #status.down::before { background: var(--bad); }
+  main { display: flex; flex-wrap: wrap; gap: 18px; padding: 18px; align-items: flex-start; }
+  .video { position: relative; flex: 0 1 auto; min-width: 320px; min-height: 240px;
+           background: #000; border: 1px solid var(--line); border-radius: 8px;
+           overflow: hidden; }
+  /* Natural size when it fits (no blur), scaled down with its aspect ratio when not. */
+  #video { display: block; max-width: 100%; max-height: calc(100vh - 100px); width: auto;
+           height: auto; margin: 0 auto; }
+  #overlay { position: absolute; inset: 0; display: flex; align-items: center;
+             justify-content: center; padding: 20px; text-align: center; color: var(--dim);
+             background: rgba(0, 0, 0, .6); }
+  #overlay[hidden] { display: none; }
+  aside { flex: 0 0 290px; background: var(--card); border: 1px solid var(--line);
+          border-radius: 8px; padding: 14px 16px; }
+  dl { display: grid; grid-template-columns: auto 1fr; gap: 7px 14px; margin: 0; }
+  dt { color: var(--dim); }
+  dd { margin: 0; text-align: right; font-variant-numeric: tabular-nums;
+       overflow-wrap: anywhere; }
+  .links { margin-top: 14px; font-size: 12px; color: var(--dim); }
+  a { color: #8ab4f8; }
+</style>
+</head>
+<body>
+<header>
+  <h1>{{title}}</h1>
+  <span id="status">connecting</span>
+</header>
+<main>
+  <div class="video">
+    <img id="video" src="/stream" alt="live video">
+    <div id="overlay" hidden></div>
+  </div>
+  <aside>
+    <dl>
+      <dt>topic</dt><dd id="stat-topic">-</dd>
+      <dt>fps</dt><dd id="stat-fps">-</dd>
+      <dt>latency p50</dt><dd id="stat-latency">-</dd>
+      <dt>latency p99</dt><dd id="stat-latency-p99">-</dd>
+      <dt>resolution</dt><dd id="stat-resolution">-</dd>
+      <dt>encoding</dt><dd id="stat-encoding">-</dd>
+      <dt>frames</dt><dd id="stat-frames">-</dd>
+      <dt>viewers</dt><dd id="stat-clients">-</dd>
+    </dl>
+    <div class="links"><a href="/snapshot.jpg" download>snapshot</a> &middot;
+      <a href="/stats">stats JSON</a></div>
+  </aside>
+</main>
+<script>
+"use strict";
+(function () {
+  const video = document.getElementById("video");
+  const overlay = document.getElementById("overlay");
+  const status = document.getElementById("status");
+  let retry = null;
+
+  function show(id, text) { document.getElementById(id).textContent = text; }
+  function num(value, digits, unit) {
+    return (typeof value === "number") ? value.toFixed(digits) + (unit || "") : "-";
+  }
+  function setStatus(text, cls) { status.textContent = text; status.className = cls; }
+
+  function connectVideo() {
+    retry = null;
+    video.src = "/stream?t=" + Date.now();
+  }
+  function message(text) { overlay.textContent = text; overlay.hidden = !text; }
+  video.addEventListener("error", function () {
+    message("video unavailable (too many viewers, or the node stopped); retrying");
+    if (!retry && !document.hidden) { retry = setTimeout(connectVideo, 3000); }
+  });
+  // A hidden tab stops its stream, so background tabs cost the robot nothing.
+  document.addEventListener("visibilitychange", function () {
+    if (document.hidden) { video.removeAttribute("src"); } else { connectVideo(); }
+  });
+
+  // One request at a time, one per second: the page never floods the server.
+  async function poll() {
+    try {
+      const response = await fetch("/stats", { cache: "no-store" });
+      if (!response.ok) { throw new Error(response.status); }
+      const s = await response.json();
+      show("stat-topic", s.topic || "-");
+      show("stat-fps", num(s.fps, 1));
+      show("stat-latency", num(s.latency_ms_p50, 1, " ms"));
+      show("stat-latency-p99", num(s.latency_ms_p99, 1, " ms"));
+      show("stat-resolution", (s.width && s.height) ? s.width + " \\u00d7 " + s.height : "-");
+      show("stat-encoding", s.encoding || "-");
+      show("stat-frames", (typeof s.frames === "number") ? String(s.frames) : "-");
+      show("stat-clients", String(s.clients));
+      if (s.viewer_frames > 0) {
+        setStatus("live", "live");
+        if (!retry) { message(""); }
+      } else {
+        setStatus("waiting for frames", "");
+        message("waiting for the first frame");
+      }
+    } catch (e) {
+      setStatus("disconnected", "down");
+    }
+    setTimeout(poll, 1000);
+  }
+  poll();
+})();
+</script>
+</body>
+</html>
+"""

@@ -1,0 +1,172 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The installed cv_bridge_test node end to end: images in, images with the red circle out."""
+
+import re
+import signal
+import urllib.request
+
+import cv2
+import numpy as np
+import pytest
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from ros_harness import wait_until
+from sensor_msgs.msg import Image
+
+RED = (0, 0, 255)  # BGR
+
+
+def image_msg(image, encoding, stamp_sec, frame_id='cam'):
+    msg = Image()
+    msg.header.stamp.sec = stamp_sec
+    msg.header.frame_id = frame_id
+    msg.height, msg.width = image.shape[:2]
+    msg.encoding = encoding
+    msg.step = image.shape[1] * (image.shape[2] if image.ndim == 3 else 1)
+    msg.data = np.ascontiguousarray(image).tobytes()
+    return msg
+
+
+def as_bgr(msg):
+    assert msg.encoding == 'bgr8' and msg.step == msg.width * 3
+    return np.frombuffer(bytes(msg.data), np.uint8).reshape(msg.height, msg.width, 3)
+
+
+def distance_to_circle_center(height, width):
+    ys, xs = np.mgrid[:height, :width]
+    return np.hypot(xs - 60, ys - 60)
+
+
+class Probe:
+    """Publishes to usb_camera/image and collects cv_bridge_image, on the test's domain."""
+
+    def __init__(self, peer, depth=10):
+        qos = QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE)
+        self.publisher = peer.node.create_publisher(Image, 'usb_camera/image', qos)
+        self.received = peer.collect(Image, 'cv_bridge_image',
+                                     QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+
+    def wait_connected(self, node):
+        """Publish a warm-up image until its result comes back (discovery is done)."""
+        warm_up = np.zeros((8, 8, 3), np.uint8)
+
+        def answered():
+            self.publisher.publish(image_msg(warm_up, 'bgr8', 999))
+            return any(m.header.stamp.sec == 999 for m in self.received)
+        wait_until(answered, 20.0, interval=0.2, what='cv_bridge_test to answer')
+
+    def result_for(self, stamp_sec, timeout=10.0):
+        def find():
+            return next((m for m in self.received if m.header.stamp.sec == stamp_sec), None)
+        return wait_until(find, timeout, what='the output for stamp %d' % stamp_sec)
+
+
+def test_circle_is_drawn_on_large_images_and_the_rest_is_unchanged(launch, peer):
+    node = launch('cv_bridge_test', params={'display': 'web', 'web_port': 0})
+    url = node.wait_for_output(r'viewer at (http://\S+:\d+/)').group(1)
+    probe = Probe(peer)
+    probe.wait_connected(node)
+    rng = np.random.default_rng(7)
+    cases = [  # (the image as published, its encoding, what it is in BGR)
+        (rng.integers(0, 256, (240, 320, 3), np.uint8), 'bgr8', None),
+        (rng.integers(0, 256, (480, 640, 3), np.uint8), 'bgr8', None),
+        (rng.integers(0, 256, (61, 61, 3), np.uint8), 'bgr8', None),
+        (rng.integers(0, 256, (100, 90, 3), np.uint8), 'rgb8', cv2.COLOR_RGB2BGR),
+        (rng.integers(0, 256, (120, 160), np.uint8), 'mono8', cv2.COLOR_GRAY2BGR),
+    ]
+    for stamp, (image, encoding, _) in enumerate(cases, start=1):
+        probe.publisher.publish(image_msg(image, encoding, stamp, 'frame_%d' % stamp))
+    for stamp, (image, encoding, to_bgr) in enumerate(cases, start=1):
+        out = probe.result_for(stamp)
+        assert out.header.frame_id == 'frame_%d' % stamp
+        assert out.header.stamp.nanosec == 0
+        expected = image if to_bgr is None else cv2.cvtColor(image, to_bgr)
+        result = as_bgr(out)
+        assert result.shape == expected.shape
+        distance = distance_to_circle_center(*result.shape[:2])
+        inside, outside = distance <= 29, distance >= 31  # the rim is up to the rasteriser
+        assert (result[inside] == RED).all(), 'the circle is not filled pure red'
+        assert (result[outside] == expected[outside]).all(), 'pixels outside the circle changed'
+        changed = (result != expected).any(axis=2)
+        disc = (distance <= 30).sum()  # clipped by the border on a small image
+        assert abs(changed.sum() - disc) < 0.1 * disc
+    # The browser viewer shows the processed frames.
+    with urllib.request.urlopen(url + 'snapshot.jpg', timeout=5) as answer:
+        shown = cv2.imdecode(np.frombuffer(answer.read(), np.uint8), cv2.IMREAD_COLOR)
+    assert shown.shape == (120, 160, 3)
+    assert np.abs(shown[50:70, 50:70].astype(int) - RED).max() < 40
+    assert node.stop(signal.SIGINT) == 0
+    assert 'Traceback' not in node.output()
+
+
+@pytest.mark.parametrize('height, width', [(60, 60), (60, 200), (200, 60), (10, 10), (1, 1)])
+def test_images_of_60_pixels_or_less_pass_unchanged(launch, peer, height, width):
+    node = launch('cv_bridge_test')
+    probe = Probe(peer)
+    probe.wait_connected(node)
+    image = np.random.default_rng(height * width).integers(0, 256, (height, width, 3), np.uint8)
+    probe.publisher.publish(image_msg(image, 'bgr8', 1))
+    assert (as_bgr(probe.result_for(1)) == image).all()
+    assert node.stop(signal.SIGTERM) == 0
+    assert 'Traceback' not in node.output()
+
+
+def bad_messages(count):
+    good = np.zeros((100, 100, 3), np.uint8)
+    makers = [
+        lambda m: setattr(m, 'data', m.data[:-10]),       # data too short
+        lambda m: setattr(m, 'encoding', 'fancy42'),      # unknown encoding
+        lambda m: setattr(m, 'step', 10),                 # step shorter than a row
+        lambda m: setattr(m, 'encoding', '32FC1'),        # 4 bytes a pixel: data too short
+    ]
+    for i in range(count):
+        msg = image_msg(good, 'bgr8', 5000 + i)
+        makers[i % len(makers)](msg)
+        yield msg
+
+
+ERROR_LINE = re.compile(
+    r'cannot convert a \d+x\d+ "[^"]+" image to bgr8.*\((\d+) skipped so far\)')
+
+
+def test_bad_messages_are_logged_rate_limited_and_the_node_keeps_going(launch, peer):
+    node = launch('cv_bridge_test')
+    probe = Probe(peer, depth=200)
+    probe.wait_connected(node)
+    # One image 10 bytes short: the line says which image and what is wrong with it.
+    probe.publisher.publish(next(bad_messages(1)))
+    first = node.wait_for_output(ERROR_LINE.pattern).group(0)
+    assert '100x100 "bgr8"' in first and '29990' in first, first
+    for msg in bad_messages(200):
+        probe.publisher.publish(msg)
+    good = np.random.default_rng(3).integers(0, 256, (120, 160, 3), np.uint8)
+    probe.publisher.publish(image_msg(good, 'bgr8', 1))
+    assert (as_bgr(probe.result_for(1))[100:, 100:] == good[100:, 100:]).all()
+    assert not any(5000 <= m.header.stamp.sec < 5200 for m in probe.received)
+    assert len(ERROR_LINE.findall(node.output())) == 1
+
+    # Bad messages keep coming at 20 Hz (slow enough that none is lost on the way): only when
+    # the rate-limit period is over does one more line come, with the running count.
+    def second_error_line():
+        if len(ERROR_LINE.findall(node.output())) >= 2:
+            return True
+        probe.publisher.publish(next(bad_messages(1)))
+        return False
+    wait_until(second_error_line, 15.0, interval=0.05, what='a second, later error line')
+    counts = [int(count) for count in ERROR_LINE.findall(node.output())]
+    assert len(counts) == 2, node.output()
+    assert counts[0] == 1 and counts[1] > 20, 'the error lines are not rate-limited'
+    assert node.stop(signal.SIGINT) == 0
+    assert 'Traceback' not in node.output()

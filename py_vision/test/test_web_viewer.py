@@ -1,0 +1,421 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The browser viewer over real HTTP connections, in-process (no ROS).
+
+Requests go out through raw sockets so the target reaches the server exactly as written
+(no client-side path normalisation), which is what a hostile client would do.
+"""
+
+import json
+import re
+import socket
+import struct
+
+import cv2
+import numpy as np
+from py_vision.synthetic_camera import read_frame_index, synthetic_frame
+from py_vision.web_viewer import WebViewer, WebViewerError
+import pytest
+from ros_harness import wait_until
+
+W, H = 640, 480
+
+
+@pytest.fixture
+def make_viewer():
+    """Start WebViewers on ephemeral ports; all are closed at the end of the test."""
+    viewers = []
+
+    def make(**kwargs):
+        viewer = WebViewer(port=0, **kwargs)
+        viewer.start()
+        viewers.append(viewer)
+        return viewer
+    yield make
+    for viewer in viewers:
+        viewer.close()
+
+
+def connect(viewer, timeout=5.0):
+    return socket.create_connection(('127.0.0.1', viewer.port), timeout=timeout)
+
+
+def parse_head(data):
+    head, _, body = data.partition(b'\r\n\r\n')
+    lines = [line for line in head.decode('latin-1').split('\r\n') if line]
+    status = int(lines[0].split()[1])
+    headers = {k.strip().lower(): v.strip() for k, v in (line.split(':', 1) for line in lines[1:])}
+    return status, headers, body
+
+
+def request(viewer, target, method='GET'):
+    """Send one request with the target exactly as given; return (status, headers, body)."""
+    with connect(viewer) as sock:
+        sock.sendall(('%s %s HTTP/1.1\r\nHost: localhost\r\n\r\n' % (method, target)).encode())
+        chunks = []
+        while True:  # the server closes every connection after its answer
+            chunk = sock.recv(65536)
+            if not chunk:
+                break
+            chunks.append(chunk)
+    status, headers, body = parse_head(b''.join(chunks))
+    if method != 'HEAD':
+        assert int(headers['content-length']) == len(body)
+    return status, headers, body
+
+
+class StreamClient:
+    """A /stream client that parses the multipart answer part by part."""
+
+    def __init__(self, viewer, target='/stream', rcvbuf=None):
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        if rcvbuf:
+            self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
+        self.sock.settimeout(5.0)
+        self.sock.connect(('127.0.0.1', viewer.port))
+        self.sock.sendall(b'GET %s HTTP/1.1\r\nHost: localhost\r\n\r\n' % target.encode())
+        self.file = None
+        self.received = 0
+
+    def read_head(self):
+        self.file = self.sock.makefile('rb')
+        lines = []
+        while True:
+            line = self.file.readline()
+            if line in (b'\r\n', b''):
+                break
+            lines.append(line)
+        status, headers, _ = parse_head(b''.join(lines))
+        self.status, self.headers = status, headers
+        match = re.search(r'boundary=(\S+)', headers.get('content-type', ''))
+        self.boundary = match.group(1).encode() if match else None
+        return status
+
+    def next_part(self):
+        """Return the next JPEG part as bytes."""
+        line = self.file.readline()
+        while line == b'\r\n':
+            line = self.file.readline()
+        assert line.rstrip(b'\r\n') == b'--' + self.boundary, line
+        headers = {}
+        while True:
+            line = self.file.readline().rstrip(b'\r\n')
+            if not line:
+                break
+            key, value = line.decode().split(':', 1)
+            headers[key.strip().lower()] = value.strip()
+        assert headers['content-type'] == 'image/jpeg'
+        jpeg = self.file.read(int(headers['content-length']))
+        self.received += len(jpeg)
+        return jpeg
+
+    def close(self, reset=False):
+        if reset:  # vanish abruptly: RST instead of an orderly FIN
+            self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack('ii', 1, 0))
+        if self.file is not None:
+            self.file.close()
+        self.sock.close()
+
+
+def decode(jpeg):
+    image = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_UNCHANGED)
+    assert image is not None, 'not a valid JPEG'
+    return image
+
+
+def test_stream_sends_every_new_frame_as_a_jpeg_of_the_right_size(make_viewer):
+    viewer = make_viewer()
+    client = StreamClient(viewer)
+    assert client.read_head() == 200
+    assert client.headers['content-type'].startswith('multipart/x-mixed-replace')
+    assert client.headers['cache-control'] == 'no-store'
+    previous = None
+    for index in range(1, 8):
+        viewer.submit(synthetic_frame(index, W, H))
+        image = decode(client.next_part())
+        assert image.shape == (H, W, 3)
+        assert read_frame_index(image) == index
+        if previous is not None:
+            assert np.abs(image.astype(int) - previous).mean() > 1.0
+        previous = image.astype(int)
+    mono = cv2.cvtColor(synthetic_frame(8, 320, 240), cv2.COLOR_BGR2GRAY)
+    viewer.submit(mono)
+    image = decode(client.next_part())
+    assert image.shape == (240, 320)
+    assert read_frame_index(image) == 8
+    client.close()
+
+
+def test_snapshot_is_503_until_the_first_frame_then_the_newest_jpeg(make_viewer):
+    viewer = make_viewer()
+    status, headers, body = request(viewer, '/snapshot.jpg')
+    assert status == 503
+    assert headers['retry-after'] == '1'
+    assert b'no frame' in body.lower()
+    for index in (3, 4):
+        viewer.submit(synthetic_frame(index, W, H))
+    status, headers, body = request(viewer, '/snapshot.jpg')
+    assert status == 200
+    assert headers['content-type'] == 'image/jpeg'
+    image = decode(body)
+    assert image.shape == (H, W, 3)
+    assert read_frame_index(image) == 4
+
+
+def test_stats_are_json_with_the_viewer_counters(make_viewer):
+    viewer = make_viewer()
+    viewer.set_stats({'fps': 14.5, 'latency_ms_p50': np.float64(3.25),
+                      'latency_ms_p99': float('nan'), 'width': np.int64(W), 'height': H,
+                      'encoding': 'bgr8', 'topic': '/usb_camera/image', 'frames': 7})
+    client = StreamClient(viewer)
+    client.read_head()
+    viewer.submit(synthetic_frame(1, W, H))
+    client.next_part()
+    status, headers, body = request(viewer, '/stats?t=123')
+    assert status == 200
+    assert headers['content-type'] == 'application/json'
+    stats = json.loads(body)  # strict JSON: NaN would not parse in a browser
+    assert stats['fps'] == 14.5
+    assert stats['latency_ms_p50'] == 3.25
+    assert stats['latency_ms_p99'] is None
+    assert (stats['width'], stats['height'], stats['encoding']) == (W, H, 'bgr8')
+    assert stats['topic'] == '/usb_camera/image'
+    assert stats['clients'] == 1
+    assert stats['encoded_frames'] == 1
+    client.close()
+
+
+def test_page_is_self_contained_with_the_video_and_stats_elements(make_viewer):
+    viewer = make_viewer(title='cam <1> & "x"')
+    status, headers, body = request(viewer, '/')
+    assert status == 200
+    assert headers['content-type'] == 'text/html; charset=utf-8'
+    page = body.decode()
+    assert re.search(r'<img id="video" src="/stream"', page)
+    for element in ('stat-fps', 'stat-latency', 'stat-resolution', 'stat-encoding',
+                    'stat-topic', 'stat-clients'):
+        assert 'id="%s"' % element in page
+    assert 'cam &lt;1&gt; &amp; &quot;x&quot;' in page and 'cam <1>' not in page
+    # Nothing from elsewhere: the page has to work on a board with no internet.
+    assert not re.search(r'(src|href)="(?!/)', page)
+    assert 'http://' not in page and 'https://' not in page
+
+
+@pytest.mark.parametrize('target', [
+    '/index.html', '/favicon.ico', '/web_viewer.py', '/../etc/passwd', '/stream/..',
+    '/%2e%2e/%2e%2e/etc/passwd', '/%2E%2E/', '/..%2fetc%2fpasswd', '//stream', '/stream/',
+    '/./stats', '/STATS', '/stats/', '/snapshot.jpg/', '/%73tats', '/stream%00',
+    'http://localhost/stats', '*', '/py_vision/', '/test/',
+])
+def test_every_other_path_is_404(make_viewer, target):
+    viewer = make_viewer()
+    viewer.submit(synthetic_frame(1, W, H))
+    status, headers, body = request(viewer, target)
+    assert status == 404, target
+    assert body == b'Not found.\n'
+    assert headers['content-type'].startswith('text/plain')
+
+
+def test_head_and_unsupported_methods(make_viewer):
+    viewer = make_viewer()
+    status, headers, body = request(viewer, '/stats', 'HEAD')
+    assert status == 200 and body == b'' and int(headers['content-length']) > 0
+    status, _, body = request(viewer, '/stats', 'POST')
+    assert status == 501
+    assert b'clients' not in body
+
+
+def test_clients_beyond_the_limit_are_refused_and_a_freed_slot_is_reused(make_viewer):
+    viewer = make_viewer(max_clients=2)
+    clients = [StreamClient(viewer) for _ in range(2)]
+    viewer.submit(synthetic_frame(1, W, H))
+    for client in clients:
+        assert client.read_head() == 200
+        client.next_part()
+    assert viewer.client_count == 2
+    status, headers, body = request(viewer, '/stream')
+    assert status == 503
+    assert b'too many viewers' in body.lower()
+    assert int(headers['retry-after']) > 0
+    # The page and the stats still work for everyone watching.
+    assert request(viewer, '/')[0] == 200
+    assert json.loads(request(viewer, '/stats')[2])['clients'] == 2
+    clients[0].close()
+    wait_until(lambda: viewer.client_count == 1, 5.0, what='the slot to be freed')
+    again = StreamClient(viewer)
+    assert again.read_head() == 200
+    # A new client gets the current frame at once, then every newer one.
+    assert read_frame_index(decode(again.next_part())) == 1
+    viewer.submit(synthetic_frame(2, W, H))
+    assert read_frame_index(decode(again.next_part())) == 2
+    assert read_frame_index(decode(clients[1].next_part())) == 2
+    again.close()
+    clients[1].close()
+
+
+@pytest.mark.parametrize('frames_keep_coming', [True, False])
+def test_a_client_vanishing_mid_stream_frees_its_slot(make_viewer, frames_keep_coming):
+    viewer = make_viewer(max_clients=1)
+    client = StreamClient(viewer)
+    client.read_head()
+    viewer.submit(synthetic_frame(1, W, H))
+    client.next_part()
+    viewer.submit(synthetic_frame(2, W, H))
+    client.file.read(100)  # stop in the middle of a part
+    client.close(reset=True)
+    index = [2]
+
+    def slot_free():
+        if frames_keep_coming:
+            index[0] += 1
+            viewer.submit(synthetic_frame(index[0], W, H))
+        return viewer.client_count == 0
+    wait_until(slot_free, 5.0, interval=0.05, what='the vanished client to be dropped')
+    survivor = StreamClient(viewer)
+    assert survivor.read_head() == 200
+    assert read_frame_index(decode(survivor.next_part())) == index[0]
+    viewer.submit(synthetic_frame(100, W, H))
+    assert read_frame_index(decode(survivor.next_part())) == 100
+    survivor.close()
+
+
+def test_each_frame_is_encoded_once_for_all_clients_and_never_without_clients(make_viewer):
+    viewer = make_viewer(max_clients=4)
+    for index in range(1, 31):
+        viewer.submit(synthetic_frame(index, W, H))
+    assert viewer.encoded_frames == 0
+    clients = [StreamClient(viewer) for _ in range(4)]
+    for client in clients:
+        client.read_head()
+    parts = [client.next_part() for client in clients]  # all get frame 30, encoded once
+    assert len(set(parts)) == 1
+    assert viewer.encoded_frames == 1
+    for index in range(31, 36):
+        viewer.submit(synthetic_frame(index, W, H))
+        parts = [client.next_part() for client in clients]
+        assert len(set(parts)) == 1
+        assert read_frame_index(decode(parts[0])) == index
+        assert request(viewer, '/snapshot.jpg')[2] == parts[0]
+    assert viewer.encoded_frames == 6
+    for client in clients:
+        client.close()
+
+
+def test_a_client_that_never_reads_slows_neither_submit_nor_other_clients(make_viewer):
+    viewer = make_viewer(max_clients=2)
+    slow = StreamClient(viewer, rcvbuf=4096)  # sends its request, then never reads
+    wait_until(lambda: viewer.client_count == 1, 5.0, what='the slow client')
+    fast = StreamClient(viewer)
+    fast.read_head()
+    rng = np.random.default_rng(1)
+    # Noise barely compresses: ~0.8 MB a frame fills the slow client's buffers within a few.
+    frames = [rng.integers(0, 256, (960, 1280, 3), np.uint8) for _ in range(4)]
+    for index in range(30):
+        viewer.submit(frames[index % 4])
+        jpeg = fast.next_part()
+        assert request(viewer, '/snapshot.jpg')[2] == jpeg, 'the fast client lags behind'
+    assert viewer.encoded_frames == 30
+    assert viewer.client_count == 2
+    slow.sock.setblocking(False)
+    waiting = 0
+    try:
+        while True:
+            chunk = slow.sock.recv(1 << 20)
+            if not chunk:
+                break
+            waiting += len(chunk)
+    except BlockingIOError:
+        pass
+    assert waiting < fast.received / 2, 'the slow client was not held back'
+    slow.close()
+    fast.close()
+
+
+def test_idle_connections_are_bounded(make_viewer):
+    viewer = make_viewer(max_clients=1)
+    idle = []
+    try:
+        # Connections that never send a request: slowloris. Beyond the cap they are turned
+        # away at once, so they cannot pile up server threads.
+        for _ in range(40):
+            idle.append(connect(viewer))
+        refused = 0
+        for sock in idle[-10:]:
+            try:
+                sock.settimeout(2.0)
+                answer = sock.recv(4096)
+            except socket.timeout:
+                continue
+            except ConnectionResetError:
+                answer = b''
+            assert answer == b'' or answer.startswith(b'HTTP/1.1 503')
+            refused += 1
+        assert refused == 10
+    finally:
+        for sock in idle:
+            sock.close()
+    wait_until(lambda: _stats_ok(viewer), 5.0, interval=0.1, what='service after the flood')
+
+
+def _stats_ok(viewer):
+    try:
+        return request(viewer, '/stats')[0] == 200
+    except OSError:
+        return False
+
+
+def test_close_drops_clients_and_releases_the_port(make_viewer):
+    viewer = make_viewer()
+    port = viewer.port
+    assert viewer.url == 'http://127.0.0.1:%d/' % port
+    client = StreamClient(viewer)
+    client.read_head()
+    viewer.submit(synthetic_frame(1, W, H))
+    client.next_part()
+    viewer.close()
+    # The stream ends (EOF or reset), it does not hang.
+    try:
+        assert b'Content-Type' not in client.file.read()
+    except ConnectionResetError:
+        pass
+    client.close()
+    again = WebViewer(port=port)
+    again.start()
+    try:
+        assert again.port == port
+        assert request(again, '/stats')[0] == 200
+    finally:
+        again.close()
+
+
+def test_a_port_in_use_is_a_clear_error(make_viewer):
+    viewer = make_viewer()
+    second = WebViewer(port=viewer.port)
+    with pytest.raises(WebViewerError) as error:
+        second.start()
+    message = str(error.value)
+    assert '127.0.0.1:%d' % viewer.port in message
+    assert 'web_port' in message
+
+
+@pytest.mark.parametrize('image', [
+    np.zeros((4, 4), np.uint16), np.zeros((4, 4, 3), np.float32), np.zeros((4, 4, 4), np.uint8),
+    np.zeros(4, np.uint8), [[0, 1], [2, 3]],
+])
+def test_submit_refuses_what_it_cannot_show(make_viewer, image):
+    viewer = make_viewer()
+    with pytest.raises(ValueError, match='uint8|numpy'):
+        viewer.submit(image)
