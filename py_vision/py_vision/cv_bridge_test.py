@@ -24,17 +24,15 @@ the processed frames are also shown, like the subscriber shows its own.
 
 import cv2
 from py_vision.cv_bridge import CvBridge, CvBridgeError
-from py_vision.display import window_unavailable_reason, WindowDisplay
-from py_vision.node_main import ConfigError, main_for
+from py_vision.display import declare_display_parameters, Display
+from py_vision.node_main import main_for
 from py_vision.params import Parameters
 from py_vision.qos import ImageSubscription, publisher_qos
 from py_vision.stats import StreamStats
-from py_vision.web_viewer import WebViewer, WebViewerError
 from rclpy.node import Node
 from rclpy.time import Time
 from sensor_msgs.msg import Image
 
-DISPLAYS = ('none', 'web', 'window', 'auto')
 CIRCLE_CENTER, CIRCLE_RADIUS, CIRCLE_BGR = (60, 60), 30, (0, 0, 255)
 ERROR_LOG_PERIOD_S = 5.0
 WEB_STATS_PERIOD_S = 1.0
@@ -46,51 +44,19 @@ class CvBridgeTest(Node):
     def __init__(self):
         super().__init__(self.NODE_NAME)
         params = Parameters(self)
-        display = params.declare(
-            'display', 'none', 'where to show the processed frames',
-            check=DISPLAYS.__contains__, accepted=', '.join(DISPLAYS))
-        web_host = params.declare(
-            'web_host', '127.0.0.1', 'address the browser viewer listens on', check=bool,
-            accepted='an IP address or host name')
-        web_port = params.declare(
-            'web_port', 8080, 'port of the browser viewer', check=lambda v: 0 <= v <= 65535,
-            accepted='0..65535 (0: any free port)')
+        display, web_host, web_port = declare_display_parameters(params, 'none')
 
         self.bridge_ = CvBridge()
         self.stats = StreamStats(window_s=WEB_STATS_PERIOD_S * 5)
-        self.window = None
-        self.viewer = None
-        self._open_display(display, web_host, web_port)
+        self.display = Display(self.get_logger(), display, web_host, web_port, 'cv_bridge_image')
         # Reliable with a queue of 10, the ROS 2 default: what the seed's rospy publisher
         # gives, and both reliable and best-effort subscribers (rqt_image_view) receive it.
         self.publisher_ = self.create_publisher(Image, 'cv_bridge_image', publisher_qos())
         self.subscription_ = ImageSubscription(self, Image, 'usb_camera/image', self.callback)
-        if self.viewer is not None:
+        if self.display.viewer is not None:
             self.create_timer(WEB_STATS_PERIOD_S, self._update_web_stats)
         self.get_logger().info('drawing on images from %s, publishing them on %s' % (
             self.subscription_.topic_name, self.publisher_.topic_name))
-
-    def _open_display(self, display, web_host, web_port):
-        if display in ('auto', 'window'):
-            reason = window_unavailable_reason()
-            if reason is None:
-                self.window = WindowDisplay(title=self.NODE_NAME)
-                return
-            if display == 'window':
-                self.get_logger().warning(
-                    'display:=window is not possible: %s; not showing the frames '
-                    '(display:=web shows them in a browser)' % reason)
-                return
-            display = 'web'
-        if display == 'web':
-            self.viewer = WebViewer(web_host, web_port, title='py_vision: cv_bridge_image',
-                                    logger=self.get_logger())
-            try:
-                self.viewer.start()
-            except WebViewerError as error:
-                self.viewer = None
-                raise ConfigError('parameter web_port: %s' % error)
-            self.get_logger().info('browser viewer at %s' % self.viewer.url)
 
     def callback(self, msg):
         try:
@@ -112,22 +78,16 @@ class CvBridgeTest(Node):
             self.get_logger().info('first image: %dx%d %s' % (cols, rows, msg.encoding))
         latency = self.get_clock().now() - Time.from_msg(msg.header.stamp)
         self.stats.add(latency.nanoseconds / 1e9, cols, rows, 'bgr8')
-        if self.window is not None:
-            self.window.show(image)
-        if self.viewer is not None:
-            self.viewer.submit(image)
+        self.display.show(image)
 
     def _update_web_stats(self):
         stats = self.stats.snapshot()
         stats['topic'] = self.publisher_.topic_name
-        self.viewer.set_stats(stats)
+        self.display.viewer.set_stats(stats)
 
     def close(self):
         """Close the window or the browser viewer (releasing its port)."""
-        if self.window is not None:
-            self.window.close()
-        if self.viewer is not None:
-            self.viewer.close()
+        self.display.close()
 
 
 main = main_for(CvBridgeTest)

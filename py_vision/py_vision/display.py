@@ -12,14 +12,21 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Where the subscriber shows frames: an OpenCV window when this machine can open one."""
+"""
+Where a node shows frames: an OpenCV window, the browser viewer, or nowhere.
+
+`auto` takes a window where this machine can open one (a screen and an OpenCV with GUI
+support) and the browser viewer otherwise, which is what a board without a screen needs.
+"""
 
 import os
 import sys
 
 import cv2
+from py_vision.node_main import ConfigError
+from py_vision.web_viewer import WebViewer, WebViewerError
 
-WINDOW_TITLE = 'Video Stream'
+DISPLAYS = ('auto', 'window', 'web', 'none')
 
 
 def window_unavailable_reason():
@@ -28,25 +35,73 @@ def window_unavailable_reason():
             os.environ.get('DISPLAY') or os.environ.get('WAYLAND_DISPLAY')):
         return 'no DISPLAY is set (no screen, or ssh without X forwarding)'
     try:
-        cv2.namedWindow(WINDOW_TITLE, cv2.WINDOW_AUTOSIZE)
+        cv2.namedWindow('py_vision', cv2.WINDOW_AUTOSIZE)
+        cv2.destroyWindow('py_vision')
     except cv2.error:
         return 'this OpenCV has no GUI support (opencv-python-headless)'
     return None
 
 
-class WindowDisplay:
-    """The tutorial's cv2.imshow window; call only after window_unavailable_reason() is None."""
+def declare_display_parameters(params, default):
+    """Declare `display`, `web_host` and `web_port`; return their checked values."""
+    display = params.declare(
+        'display', default, 'where to show frames', check=DISPLAYS.__contains__,
+        accepted=', '.join(DISPLAYS))
+    web_host = params.declare(
+        'web_host', '127.0.0.1', 'address the browser viewer listens on', check=bool,
+        accepted='an IP address or host name')
+    web_port = params.declare(
+        'web_port', 8080, 'port of the browser viewer', check=lambda v: 0 <= v <= 65535,
+        accepted='0..65535 (0: any free port)')
+    return display, web_host, web_port
 
-    def __init__(self, title=WINDOW_TITLE):
-        self.title = title
-        cv2.namedWindow(title, cv2.WINDOW_AUTOSIZE)
+
+class Display:
+    """Shows bgr8 frames in the way the `display` parameter asks for."""
+
+    def __init__(self, logger, mode, web_host, web_port, title):
+        self.window_title = None
+        self.viewer = None
+        if mode in ('auto', 'window'):
+            reason = window_unavailable_reason()
+            if reason is None:
+                self.window_title = title
+                cv2.namedWindow(title, cv2.WINDOW_AUTOSIZE)
+                logger.info('showing frames in an OpenCV window')
+                return
+            if mode == 'window':
+                logger.warning('display:=window is not possible: %s; showing statistics only '
+                               '(display:=web shows the stream in a browser)' % reason)
+                return
+            mode = 'web'
+        if mode == 'web':
+            viewer = WebViewer(web_host, web_port, title='py_vision: %s' % title, logger=logger)
+            try:
+                viewer.start()
+            except WebViewerError as error:
+                raise ConfigError(str(error))
+            self.viewer = viewer
+            logger.info('browser viewer at %s' % viewer.url)
+
+    @property
+    def active(self):
+        """Return True when frames are shown somewhere (so they need converting)."""
+        return self.window_title is not None or self.viewer is not None
 
     def show(self, image):
-        cv2.imshow(self.title, image)
-        cv2.waitKey(1)
+        """Show one bgr8 (or mono8) frame; cheap when nobody watches the browser viewer."""
+        if self.window_title is not None:
+            cv2.imshow(self.window_title, image)
+            cv2.waitKey(1)
+        if self.viewer is not None:
+            self.viewer.submit(image)
 
     def close(self):
-        try:
-            cv2.destroyWindow(self.title)
-        except cv2.error:
-            pass
+        """Close the window, or stop the viewer and release its port."""
+        if self.window_title is not None:
+            try:
+                cv2.destroyWindow(self.window_title)
+            except cv2.error:
+                pass
+        if self.viewer is not None:
+            self.viewer.close()

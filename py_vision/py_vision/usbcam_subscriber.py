@@ -21,18 +21,16 @@ rate and latency, and survives malformed images with a rate-limited error.
 """
 
 from py_vision.cv_bridge import CvBridge, CvBridgeError, cvtColorForDisplay
-from py_vision.display import window_unavailable_reason, WindowDisplay
-from py_vision.node_main import ConfigError, main_for
+from py_vision.display import declare_display_parameters, Display
+from py_vision.node_main import main_for
 from py_vision.params import Parameters
 from py_vision.qos import ImageSubscription
 from py_vision.stats import StreamStats
 from py_vision.synthetic_camera import read_frame_index
-from py_vision.web_viewer import WebViewer, WebViewerError
 from rclpy.node import Node
 from rclpy.time import Time
 from sensor_msgs.msg import Image
 
-DISPLAYS = ('auto', 'window', 'web', 'none')
 WEB_STATS_PERIOD_S = 1.0
 
 
@@ -42,15 +40,7 @@ class VideoSubscriber(Node):
     def __init__(self):
         super().__init__(self.NODE_NAME)
         params = Parameters(self)
-        display = params.declare(
-            'display', 'auto', 'where to show frames', check=DISPLAYS.__contains__,
-            accepted=', '.join(DISPLAYS))
-        web_host = params.declare(
-            'web_host', '127.0.0.1', 'address the browser viewer listens on', check=bool,
-            accepted='an IP address or host name')
-        web_port = params.declare(
-            'web_port', 8080, 'port of the browser viewer', check=lambda v: 0 <= v <= 65535,
-            accepted='0..65535 (0: any free port)')
+        display, web_host, web_port = declare_display_parameters(params, 'auto')
         self.stats_period = params.declare(
             'stats_period', 5.0, 'seconds between statistics log lines',
             check=lambda v: 0 < v <= 3600, accepted='a number > 0 and <= 3600',
@@ -58,38 +48,13 @@ class VideoSubscriber(Node):
 
         self.bridge_ = CvBridge()
         self.stats = StreamStats(window_s=self.stats_period)
-        self.window = None
-        self.viewer = None
         self._errors_reported = 0
         self._last_error = ''
-        self._open_display(display, web_host, web_port)
+        self.display = Display(self.get_logger(), display, web_host, web_port, 'usb_camera/image')
         self.subscription_ = ImageSubscription(self, Image, 'usb_camera/image', self.callback)
         self._stats_timer = self.create_timer(self.stats_period, self.report_stats)
-        if self.viewer is not None:
+        if self.display.viewer is not None:
             self.create_timer(WEB_STATS_PERIOD_S, self._update_web_stats)
-
-    def _open_display(self, display, web_host, web_port):
-        if display in ('auto', 'window'):
-            reason = window_unavailable_reason()
-            if reason is None:
-                self.window = WindowDisplay()
-                self.get_logger().info('showing frames in an OpenCV window')
-                return
-            if display == 'window':
-                self.get_logger().warning(
-                    'display:=window is not possible: %s; showing statistics only '
-                    '(display:=web shows the stream in a browser)' % reason)
-                return
-            display = 'web'
-        if display == 'web':
-            self.viewer = WebViewer(web_host, web_port, title='py_vision: usb_camera/image',
-                                    logger=self.get_logger())
-            try:
-                self.viewer.start()
-            except WebViewerError as error:
-                self.viewer = None
-                raise ConfigError('parameter web_port: %s' % error)
-            self.get_logger().info('browser viewer at %s' % self.viewer.url)
 
     def _set_stats_period(self, period):
         self.stats_period = period
@@ -102,7 +67,7 @@ class VideoSubscriber(Node):
         try:
             image = self.bridge_.imgmsg_to_cv2(msg)
             shown = image if msg.encoding == 'bgr8' else None
-            if shown is None and (self.window is not None or self.viewer is not None):
+            if shown is None and self.display.active:
                 # Depth and other float images are scaled to their range, as image viewers do.
                 shown = cvtColorForDisplay(image, msg.encoding, 'bgr8',
                                            do_dynamic_scaling=image.dtype.kind == 'f')
@@ -111,10 +76,8 @@ class VideoSubscriber(Node):
             return
         self.stats.add(latency, msg.width, msg.height, msg.encoding,
                        read_frame_index(image) if msg.encoding == 'bgr8' else None)
-        if self.window is not None:
-            self.window.show(shown)
-        if self.viewer is not None:
-            self.viewer.submit(shown)
+        if shown is not None:
+            self.display.show(shown)
 
     def _bad_message(self, msg, error):
         self.stats.add_error()
@@ -152,14 +115,11 @@ class VideoSubscriber(Node):
     def _update_web_stats(self):
         stats = self.stats.snapshot()
         stats['topic'] = self.subscription_.topic_name
-        self.viewer.set_stats(stats)
+        self.display.viewer.set_stats(stats)
 
     def close(self):
         """Close the window or the browser viewer (releasing its port)."""
-        if self.window is not None:
-            self.window.close()
-        if self.viewer is not None:
-            self.viewer.close()
+        self.display.close()
 
 
 main = main_for(VideoSubscriber)
