@@ -53,7 +53,9 @@ def test_unplugged_camera_is_reopened_and_publishing_resumes(launch, peer):
     received = peer.collect(Image, 'usb_camera/image', RELIABLE)
     subscriber = launch('usbcam_subscriber', {'display': 'none', 'stats_period': 1.0})
     publisher = launch('usbcam_publisher', {
-        'video_device': 'synthetic?stop_after=20&unplugged_for=2.5', 'framerate': 20.0})
+        'video_device': 'synthetic?stop_after=80&unplugged_for=2.5', 'framerate': 20.0})
+    # 80 frames (4 s) leave discovery time to match the peer before the unplug.
+    wait_until(lambda: received, 30, what='frames before the unplug')
     publisher.wait_for_output(r'WARN.*lost synthetic', 30)
     count_at_unplug = len(received)
     publisher.wait_for_output(r'synthetic.* is back after \d+ attempt', 30)
