@@ -32,6 +32,7 @@ from rclpy.time import Time
 from sensor_msgs.msg import Image
 
 WEB_STATS_PERIOD_S = 1.0
+DEPTH_ENCODINGS = ('16UC1', '16SC1')
 
 
 class VideoSubscriber(Node):
@@ -68,9 +69,11 @@ class VideoSubscriber(Node):
             image = self.bridge_.imgmsg_to_cv2(msg)
             shown = image if msg.encoding == 'bgr8' else None
             if shown is None and self.display.active:
-                # Depth and other float images are scaled to their range, as image viewers do.
+                # Depth images (float, or 16UC1 in millimetres) are scaled to the range they
+                # hold, as image viewers do; mono16 and colour images keep their full range.
+                depth = image.dtype.kind == 'f' or msg.encoding in DEPTH_ENCODINGS
                 shown = cvtColorForDisplay(image, msg.encoding, 'bgr8',
-                                           do_dynamic_scaling=image.dtype.kind == 'f')
+                                           do_dynamic_scaling=depth)
         except CvBridgeError as error:
             self._bad_message(msg, error)
             return
