@@ -36,11 +36,9 @@ Writes bench/results/pipeline.json and pipeline.png and prints a Markdown table.
 """
 
 import argparse
-import fcntl
 import json
 import os
 from pathlib import Path
-import random
 import shutil
 import signal
 import subprocess
@@ -69,11 +67,12 @@ NETNS_ADDR = ('10.77.0.1', '10.77.0.2')
 # between the "hosts" even if Fast DDS tried.
 PRIVATE_SHM = 'mount -t tmpfs -o size=2g pyvbench_shm /dev/shm && exec "$@"'
 
-# Same lock directory and range as the tests' domain ids, so a bench run and tests never share.
-DOMAIN_LOCKS = Path(tempfile.gettempdir()) / 'py_vision_test_domains'
-DOMAIN_RANGE = range(1, 200)
-
 CLK_TCK = os.sysconf('SC_CLK_TCK')
+
+# The tests' harness reserves ROS domain ids through lock files: sharing it means a bench run
+# and a test run on one machine never share a domain.
+sys.path.insert(0, str(REPO / 'py_vision' / 'test'))
+from ros_harness import DomainId  # noqa: E402,I100 (found through the path set just above)
 
 
 # ----------------------------------------------------------------------------- environment
@@ -91,28 +90,6 @@ def installed_env():
         env.pop(name, None)
     env['PYTHONUNBUFFERED'] = '1'
     return env
-
-
-class DomainId:
-    """An exclusive ROS_DOMAIN_ID, held through a lock file for as long as the bench runs."""
-
-    def __init__(self):
-        DOMAIN_LOCKS.mkdir(exist_ok=True)
-        ids = list(DOMAIN_RANGE)
-        random.shuffle(ids)
-        for candidate in ids:
-            handle = open(DOMAIN_LOCKS / ('%d.lock' % candidate), 'w')
-            try:
-                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError:
-                handle.close()
-                continue
-            self.value, self._handle = candidate, handle
-            return
-        sys.exit('no free ROS_DOMAIN_ID')
-
-    def release(self):
-        self._handle.close()
 
 
 # ----------------------------------------------------------------------------- processes

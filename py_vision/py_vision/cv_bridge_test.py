@@ -35,7 +35,6 @@ from sensor_msgs.msg import Image
 
 CIRCLE_CENTER, CIRCLE_RADIUS, CIRCLE_BGR = (60, 60), 30, (0, 0, 255)
 ERROR_LOG_PERIOD_S = 5.0
-WEB_STATS_PERIOD_S = 1.0
 
 
 class CvBridgeTest(Node):
@@ -47,14 +46,13 @@ class CvBridgeTest(Node):
         display, web_host, web_port = declare_display_parameters(params, 'none')
 
         self.bridge_ = CvBridge()
-        self.stats = StreamStats(window_s=WEB_STATS_PERIOD_S * 5)
+        self.stats = StreamStats(window_s=5.0)
         self.display = Display(self.get_logger(), display, web_host, web_port, 'cv_bridge_image')
         # Reliable with a queue of 10, the ROS 2 default: what the seed's rospy publisher
         # gives, and both reliable and best-effort subscribers (rqt_image_view) receive it.
         self.publisher_ = self.create_publisher(Image, 'cv_bridge_image', publisher_qos())
         self.subscription_ = ImageSubscription(self, Image, 'usb_camera/image', self.callback)
-        if self.display.viewer is not None:
-            self.create_timer(WEB_STATS_PERIOD_S, self._update_web_stats)
+        self.display.follow_stats(self, self.stats, self.publisher_.topic_name)
         self.get_logger().info('drawing on images from %s, publishing them on %s' % (
             self.subscription_.topic_name, self.publisher_.topic_name))
 
@@ -79,11 +77,6 @@ class CvBridgeTest(Node):
         latency = self.get_clock().now() - Time.from_msg(msg.header.stamp)
         self.stats.add(latency.nanoseconds / 1e9, cols, rows, 'bgr8')
         self.display.show(image)
-
-    def _update_web_stats(self):
-        stats = self.stats.snapshot()
-        stats['topic'] = self.publisher_.topic_name
-        self.display.viewer.set_stats(stats)
 
     def close(self):
         """Close the window or the browser viewer (releasing its port)."""

@@ -27,6 +27,7 @@ from py_vision.node_main import ConfigError
 from py_vision.web_viewer import WebViewer, WebViewerError
 
 DISPLAYS = ('auto', 'window', 'web', 'none')
+WEB_STATS_PERIOD_S = 1.0
 
 
 def window_unavailable_reason():
@@ -82,6 +83,12 @@ class Display:
                 raise ConfigError(str(error))
             self.viewer = viewer
             logger.info('browser viewer at %s' % viewer.url)
+
+    def follow_stats(self, node, stats, topic):
+        """Have the browser viewer show stats (a StreamStats) of topic, updated every second."""
+        if self.viewer is not None:
+            node.create_timer(WEB_STATS_PERIOD_S, lambda: self.viewer.set_stats(
+                dict(stats.snapshot(), topic=topic)))
 
     @property
     def active(self):

@@ -38,6 +38,7 @@ fails while the device stays open). Devices with the same name and options share
 in this module: the frame index and an unplug carry over to the next camera opened with them.
 """
 
+import functools
 import math
 import threading
 import time
@@ -109,21 +110,9 @@ class _Geometry:
         self.box_w = min(width, max(2, (width // 16) & ~1))
 
 
-_geometry_cache = {}
-_layout_cache = {}
-_cache_lock = threading.Lock()
-
-
+@functools.lru_cache(maxsize=32)
 def _geometry(width, height):
-    key = (width, height)
-    geo = _geometry_cache.get(key)
-    if geo is None:
-        geo = _Geometry(width, height)
-        with _cache_lock:
-            if len(_geometry_cache) > 32:
-                _geometry_cache.clear()
-            _geometry_cache[key] = geo
-    return geo
+    return _Geometry(width, height)
 
 
 def bgr_to_yuyv(bgr):
@@ -226,16 +215,9 @@ class _Layout:
         buf[cy:cy + blocks.shape[0], cx:cx + blocks.shape[1], 0] = blocks
 
 
+@functools.lru_cache(maxsize=8)
 def _layout(width, height):
-    key = (width, height)
-    layout = _layout_cache.get(key)
-    if layout is None:
-        layout = _Layout(width, height)
-        with _cache_lock:
-            if len(_layout_cache) > 8:
-                _layout_cache.clear()
-            _layout_cache[key] = layout
-    return layout
+    return _Layout(width, height)
 
 
 def synthetic_yuyv(index, width, height):

@@ -31,7 +31,6 @@ from rclpy.node import Node
 from rclpy.time import Time
 from sensor_msgs.msg import Image
 
-WEB_STATS_PERIOD_S = 1.0
 DEPTH_ENCODINGS = ('16UC1', '16SC1')
 
 
@@ -54,8 +53,7 @@ class VideoSubscriber(Node):
         self.display = Display(self.get_logger(), display, web_host, web_port, 'usb_camera/image')
         self.subscription_ = ImageSubscription(self, Image, 'usb_camera/image', self.callback)
         self._stats_timer = self.create_timer(self.stats_period, self.report_stats)
-        if self.display.viewer is not None:
-            self.create_timer(WEB_STATS_PERIOD_S, self._update_web_stats)
+        self.display.follow_stats(self, self.stats, self.subscription_.topic_name)
 
     def _set_stats_period(self, period):
         self.stats_period = period
@@ -114,11 +112,6 @@ class VideoSubscriber(Node):
             self.get_logger().error(
                 '%d malformed image(s) dropped in the last %.3g s; last: %s' % (
                     new_errors, self.stats_period, self._last_error))
-
-    def _update_web_stats(self):
-        stats = self.stats.snapshot()
-        stats['topic'] = self.subscription_.topic_name
-        self.display.viewer.set_stats(stats)
 
     def close(self):
         """Close the window or the browser viewer (releasing its port)."""
