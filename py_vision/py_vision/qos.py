@@ -66,8 +66,8 @@ class ImageSubscription:
 
     @property
     def topic_name(self):
-        """Return the fully resolved topic name."""
-        return self.subscription.topic_name
+        """Return the fully resolved topic name (the name as given on rclpy without it)."""
+        return getattr(self.subscription, 'topic_name', self._args[1])
 
     def _create(self):
         msg_type, topic, callback = self._args
@@ -83,7 +83,8 @@ class ImageSubscription:
         pass
 
     def _recheck(self):
-        publishers = self._node.get_publishers_info_by_topic(self.topic_name)
+        # rclpy expands and remaps a relative name here, as it does for the subscription.
+        publishers = self._node.get_publishers_info_by_topic(self._args[1])
         wanted = ReliabilityPolicy.RELIABLE
         if any(p.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT for p in publishers):
             wanted = ReliabilityPolicy.BEST_EFFORT

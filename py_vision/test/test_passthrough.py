@@ -163,3 +163,12 @@ def test_window_display_falls_back_to_stats_without_gui(launch):
     line = subscriber.wait_for_output(r'.*display:=window is not possible: .*', 20).group(0)
     assert 'statistics only' in line
     subscriber.wait_for_output(r'received [1-9]\d* frames', 30)
+
+
+def test_three_node_pipeline_from_the_readme(launch):
+    launch('usbcam_publisher', {'video_device': 'synthetic', 'framerate': 20.0})
+    launch('cv_bridge_test')
+    subscriber = launch('usbcam_subscriber', {'display': 'none', 'stats_period': 1.0},
+                        remaps={'usb_camera/image': 'cv_bridge_image'})
+    subscriber.wait_for_output(r'received [1-9]\d* frames .* 640x480 bgr8 on /cv_bridge_image',
+                               30)
