@@ -80,7 +80,9 @@ class CvBridgeTest(Node):
 
     def close(self):
         """Close the window or the browser viewer (releasing its port)."""
-        self.display.close()
+        display = getattr(self, 'display', None)  # None when start-up was interrupted
+        if display is not None:
+            display.close()
 
 
 main = main_for(CvBridgeTest)

@@ -26,6 +26,7 @@ host. So the buffer sizes are capped at the limits of the machine (and network n
 node starts on, in a copy of the profile written to the temporary directory.
 """
 
+import hashlib
 import os
 import re
 import tempfile
@@ -83,10 +84,12 @@ def fit_to_kernel(profile, limits=None):
     fitted = re.sub(r'<(sendBufferSize|receiveBufferSize)>(\d+)</\1>', cap, text)
     if fitted == text:
         return profile
-    sizes = re.findall(r'<(?:sendBufferSize|receiveBufferSize)>(\d+)<', fitted)
+    # Named after its content, so an upgraded profile never meets a stale copy; a file of
+    # another user's is never trusted.
+    digest = hashlib.sha256(fitted.encode()).hexdigest()[:16]
     path = os.path.join(tempfile.gettempdir(), 'py_vision_fastdds_%d_%s.xml' % (
-        os.getuid(), '_'.join(sizes)))
-    if not os.path.exists(path):
+        os.getuid(), digest))
+    if not (os.path.isfile(path) and os.stat(path).st_uid == os.getuid()):
         handle, partial = tempfile.mkstemp(dir=os.path.dirname(path), suffix='.xml')
         with os.fdopen(handle, 'w') as out:
             out.write(fitted)

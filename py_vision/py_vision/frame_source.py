@@ -221,12 +221,18 @@ class VideoFileSource:
         self._cap = None
         self._pending = None
 
+    def interrupt(self):
+        """Make a read() waiting for its frame in another thread fail at once, and later ones."""
+        self._pacer.cancel()
+
     def grab(self):
         """Wait until the next frame is due and read it from the file; False on failure."""
         self._grabbed = None
         if self._cap is None:
             return False
         _, due = self._pacer.wait()
+        if self._pacer.cancelled.is_set():
+            return False
         frame = self._next_frame()
         if frame is None:
             self.release()

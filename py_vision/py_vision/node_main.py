@@ -35,17 +35,23 @@ def run(node_class, args=None):
     """
     Build node_class() and spin it until Ctrl-C, SIGTERM or rclpy shutdown; return the status.
 
-    node_class must raise ConfigError for problems the user has to fix. Nodes with a
-    ``close()`` method get it called before the node is destroyed (threads, devices, sockets).
+    node_class must raise ConfigError for problems the user has to fix, have a close() that
+    releases what it holds (threads, devices, sockets) and copes with a half-built node, and
+    set `failed` when it stops because of an error.
     """
-    # Until rclpy.init() installs its handlers, a signal ends the process quietly (see
-    # py_vision/__init__.py); from then on it shuts rclpy down and spin() returns.
+    # A signal is first handled by rclpy, which shuts its context down, then passed on to the
+    # handler py_vision/__init__.py installed for the executables: SystemExit(0) in the main
+    # thread, wherever it is. So the clean-up is in `finally`, and the node object exists
+    # (__new__) before its __init__, which opens devices and ports, can be interrupted.
     dds.use_packaged_profile()
     rclpy.init(args=args)
     node = None
+    built = False
     status = 0
     try:
-        node = node_class()
+        node = node_class.__new__(node_class)
+        node.__init__()
+        built = True
         rclpy.spin(node)
     except ConfigError as error:
         get_logger(node_class.NODE_NAME).error(str(error))
@@ -58,11 +64,12 @@ def run(node_class, args=None):
         # rclpy was shut down by a signal while the node was being built.
     finally:
         if node is not None:
-            close = getattr(node, 'close', None)
-            if close is not None:
-                close()
-            node.destroy_node()
-        rclpy.try_shutdown()
+            node.close()
+            if built:
+                node.destroy_node()
+        rclpy.try_shutdown()  # also cleans up after a node interrupted half-built
+    if getattr(node, 'failed', False):
+        status = 1
     return status
 
 

@@ -33,18 +33,6 @@ def publisher_qos(reliability='reliable', depth=10):
                       reliability=RELIABILITY[reliability])
 
 
-def subscriber_qos(depth=5):
-    """
-    Return a subscription QoS that matches reliable and best-effort publishers alike.
-
-    A best-effort subscription matches both kinds of publisher; `ImageSubscription` upgrades
-    it to reliable when every publisher on the topic is reliable, so that nothing a reliable
-    publisher sends is lost.
-    """
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
-                      reliability=ReliabilityPolicy.BEST_EFFORT)
-
-
 class ImageSubscription:
     """
     A subscription that hears every publisher on its topic with the best reliability it can.

@@ -17,6 +17,8 @@
 import collections
 import time
 
+MAX_COUNTED_GAP = 100000
+
 
 def percentile(sorted_values, fraction):
     """Return the nearest-rank percentile of an already sorted, non-empty list."""
@@ -50,8 +52,11 @@ class StreamStats:
         self.frames += 1
         self.width, self.height, self.encoding = width, height, encoding
         if index is not None:
-            if self._last_index is not None and index > self._last_index + 1:
-                self.lost += index - self._last_index - 1
+            # A jump too large to be real (a camera image misread as a frame code, or a new
+            # source) re-synchronises instead of counting as lost frames.
+            skipped = index - self._last_index - 1 if self._last_index is not None else 0
+            if 0 < skipped <= MAX_COUNTED_GAP:
+                self.lost += skipped
             self._last_index = index
 
     def add_error(self):

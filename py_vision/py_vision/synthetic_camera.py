@@ -320,6 +320,11 @@ class FramePacer:
         self.drop = drop
         self.t0 = None
         self.next = 0
+        self.cancelled = threading.Event()
+
+    def cancel(self):
+        """End a wait() in progress (in another thread) and every later one at once."""
+        self.cancelled.set()
 
     def restart(self):
         """Start a new schedule at the next wait() (after a size or rate change)."""
@@ -347,18 +352,19 @@ class FramePacer:
                 self.t0 = now - number / self.fps
                 due = now
         else:
-            _sleep_until(due)
+            _sleep_until(due, self.cancelled)
         self.next = number + 1
         return number, due
 
 
-def _sleep_until(deadline):
+def _sleep_until(deadline, cancelled):
     # Sleep most of the wait, then short sleeps: never more than ~0.1 ms late, no busy spin.
-    while True:
+    # Long waits (low frame rates) are cut into 50 ms steps so that cancel() is seen quickly.
+    while not cancelled.is_set():
         remaining = deadline - _now()
         if remaining <= 0:
             return
-        _sleep(remaining - 0.001 if remaining > 0.002 else remaining)
+        _sleep(min(0.05, remaining - 0.001 if remaining > 0.002 else remaining))
 
 
 class _DeviceState:
@@ -464,6 +470,10 @@ class SyntheticCamera:
         self._buf = None
         self._grabbed = None
 
+    def interrupt(self):
+        """Make a read() waiting for its frame in another thread fail at once, and later ones."""
+        self._pacer.cancel()
+
     def _unplugged(self):
         if (self._stop_after is None or self._state.recovered
                 or self._frames < self._stop_after):
@@ -480,6 +490,8 @@ class SyntheticCamera:
             return False
         starting = not self._pacer.running
         number, due = self._pacer.wait()
+        if self._pacer.cancelled.is_set():
+            return False
         if starting:
             self._base = self._next_index(due)
         index = self._base + number

@@ -24,20 +24,17 @@ mid-stream is released and reopened with back-off, and publishing resumes when i
 import threading
 import time
 
+import cv2
 from py_vision.cv_bridge import CvBridge
 from py_vision.frame_source import open_capture, SourceError
 from py_vision.node_main import ConfigError, main_for
 from py_vision.params import Parameters
 from py_vision.qos import publisher_qos, RELIABILITY
+import rclpy
 from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.time import Time
 from sensor_msgs.msg import Image
-
-# OpenCV property ids, spelled out so that this module does not need cv2 at import.
-CAP_PROP_FRAME_WIDTH = 3
-CAP_PROP_FRAME_HEIGHT = 4
-CAP_PROP_FPS = 5
 
 # Consecutive failed reads after which the device counts as gone (one bad read is noise).
 LOST_AFTER_FAILED_READS = 5
@@ -82,6 +79,7 @@ class USBImagePublisher(Node):
         except SourceError as error:
             raise ConfigError(str(error))
         self.frames_published = 0
+        self.failed = False
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._capture_loop, name='capture', daemon=True)
         self._thread.start()
@@ -91,9 +89,9 @@ class USBImagePublisher(Node):
 
     def _open(self):
         cap = open_capture(self.video_device, self.width, self.height, self.framerate)
-        width = int(cap.get(CAP_PROP_FRAME_WIDTH))
-        height = int(cap.get(CAP_PROP_FRAME_HEIGHT))
-        fps = cap.get(CAP_PROP_FPS)
+        width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH))
+        height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
+        fps = cap.get(cv2.CAP_PROP_FPS)
         note = ''
         if (width, height) != (self.width, self.height):
             note = ' (requested %dx%d; publishing what the device gives)' % (
@@ -103,12 +101,31 @@ class USBImagePublisher(Node):
         return cap
 
     def _capture_loop(self):
+        """Read, stamp and publish frames until close(); the camera belongs to this thread."""
+        try:
+            self._capture()
+        except Exception as error:
+            if self.context.ok():
+                # A device or frame this node cannot handle: say so and end the node.
+                self.get_logger().error('capturing from %s failed: %s: %s' % (
+                    self.video_device, type(error).__name__, error))
+                self.failed = True
+                rclpy.try_shutdown(context=self.context)
+            # else: Ctrl-C or SIGTERM shut rclpy down while a frame was being published.
+        finally:
+            cap, self.cap = self.cap, None
+            if cap is not None:
+                cap.release()
+
+    def _capture(self):
         failed_reads = 0
         while not self._stop.is_set():
             if self.cap is None:
                 self.cap = self._reopen()
                 continue
             ok, frame = self.cap.read()
+            if self._stop.is_set():
+                return
             if not ok or frame is None:
                 failed_reads += 1
                 if failed_reads >= LOST_AFTER_FAILED_READS:
@@ -120,21 +137,19 @@ class USBImagePublisher(Node):
                     failed_reads = 0
                 continue
             failed_reads = 0
-            try:
-                self._publish(frame, self._capture_stamp())
-            except Exception:
-                if self.context.ok():
-                    raise
-                return  # Ctrl-C or SIGTERM shut rclpy down under this thread.
+            self._publish(frame, self._capture_stamp())
 
     def _capture_stamp(self):
         """Return the capture time of the frame just read, as a ROS time."""
         now = self.get_clock().now()
         captured = getattr(self.cap, 'last_capture_time', None)
         if captured is None:
-            return now
-        age_ns = int((time.monotonic() - captured) * 1e9)
-        return Time(nanoseconds=now.nanoseconds - max(age_ns, 0), clock_type=now.clock_type)
+            # OpenCV's V4L2 backend gives the driver's buffer time (CLOCK_MONOTONIC) here.
+            captured = self.cap.get(cv2.CAP_PROP_POS_MSEC) / 1e3
+        age_s = time.monotonic() - captured
+        if not 0 <= age_s < 1.0:
+            return now  # no usable capture time: the read has just returned the frame
+        return Time(nanoseconds=now.nanoseconds - int(age_s * 1e9), clock_type=now.clock_type)
 
     def _publish(self, frame, stamp):
         msg = self.bridge_.cv2_to_imgmsg(frame, encoding='bgr8')
@@ -165,15 +180,21 @@ class USBImagePublisher(Node):
         return None
 
     def close(self):
-        """Stop capturing and release the camera."""
+        """Stop capturing; the capture thread releases the camera."""
+        thread = getattr(self, '_thread', None)
+        if thread is None:  # start-up was interrupted before capturing began
+            return
         self._stop.set()
-        self._thread.join(2.0)
-        if self.cap is not None:
-            self.cap.release()
-            self.cap = None
+        interrupt = getattr(self.cap, 'interrupt', None)
+        if interrupt is not None:
+            interrupt()  # a synthetic camera or a file waiting for its next frame
+        thread.join(2.0)
         # rclpy may be shut down already (Ctrl-C): a logger that does not publish to /rosout.
-        get_logger(self.NODE_NAME + '.camera').info(
-            'camera released after %d frames' % self.frames_published)
+        logger = get_logger(self.NODE_NAME + '.camera')
+        if thread.is_alive():
+            logger.warning('%s is still busy; the system releases it at exit' % self.video_device)
+        else:
+            logger.info('camera released after %d frames' % self.frames_published)
 
 
 main = main_for(USBImagePublisher)

@@ -58,7 +58,7 @@ class VideoSubscriber(Node):
     def _set_stats_period(self, period):
         self.stats_period = period
         self.stats.window_s = period
-        self._stats_timer.cancel()
+        self.destroy_timer(self._stats_timer)
         self._stats_timer = self.create_timer(period, self.report_stats)
 
     def callback(self, msg):
@@ -115,7 +115,9 @@ class VideoSubscriber(Node):
 
     def close(self):
         """Close the window or the browser viewer (releasing its port)."""
-        self.display.close()
+        display = getattr(self, 'display', None)  # None when start-up was interrupted
+        if display is not None:
+            display.close()
 
 
 main = main_for(VideoSubscriber)

@@ -45,7 +45,8 @@ def test_installed_profile_gives_shared_memory_room_for_frames():
     assert 'py_vision_shm' in transports and 'py_vision_udp' in transports
 
 
-def test_used_by_default_and_capped_to_the_kernel_limits():
+def test_used_by_default_and_capped_to_the_kernel_limits(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     env = {}
     used = dds.use_packaged_profile(env)
     assert env['FASTRTPS_DEFAULT_PROFILES_FILE'] == used
@@ -67,7 +68,8 @@ def test_buffers_above_the_limit_are_capped_in_a_copy(tmp_path):
     assert dds.fit_to_kernel(packaged, big) == packaged
 
 
-def test_user_settings_and_other_rmws_are_left_alone():
+def test_user_settings_and_other_rmws_are_left_alone(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     for env in ({'FASTRTPS_DEFAULT_PROFILES_FILE': '/etc/mine.xml'},
                 {'FASTDDS_DEFAULT_PROFILES_FILE': '/etc/mine.xml'},
                 {'RMW_IMPLEMENTATION': 'rmw_cyclonedds_cpp'}):
@@ -76,3 +78,7 @@ def test_user_settings_and_other_rmws_are_left_alone():
         assert env == before
     env = {'RMW_IMPLEMENTATION': 'rmw_fastrtps_cpp'}
     assert dds.use_packaged_profile(env) is not None
+    # Fast DDS reads DEFAULT_FASTRTPS_PROFILES.xml from the working directory by itself.
+    (tmp_path / 'DEFAULT_FASTRTPS_PROFILES.xml').write_text('<profiles/>')
+    env = {}
+    assert dds.use_packaged_profile(env) is None and env == {}

@@ -222,17 +222,43 @@ def test_runtime_parameter_changes_are_applied_or_refused_with_a_reason(launch, 
 
 @pytest.mark.parametrize('executable', ['usbcam_publisher', 'usbcam_subscriber',
                                         'cv_bridge_test'])
-# From the moment the interpreter imports py_vision (about 0.2 s after exec): during the
-# imports of rclpy, numpy and OpenCV, rclpy.init(), node creation and opening the device.
-@pytest.mark.parametrize('delay', [0.4, 0.8, 1.5])
+def handles_sigterm(pid):
+    """Return True once the process has its own SIGTERM handler (py_vision is importing)."""
+    status = Path('/proc/%d/status' % pid).read_text()
+    caught = int(re.search(r'SigCgt:\s*([0-9a-f]+)', status).group(1), 16)
+    return bool(caught & (1 << (signal.SIGTERM - 1)))
+
+
+# From the moment the interpreter imports py_vision: during the imports of rclpy, numpy and
+# OpenCV, rclpy.init(), node creation and opening the device or the viewer's port.
+@pytest.mark.parametrize('executable', ['usbcam_publisher', 'usbcam_subscriber',
+                                        'cv_bridge_test'])
+@pytest.mark.parametrize('delay', [0.0, 0.3, 1.0])
 def test_signal_during_start_up_exits_cleanly(launch, executable, delay):
     params = {'video_device': 'synthetic'} if executable == 'usbcam_publisher' else {}
     if executable == 'usbcam_subscriber':
         params = {'display': 'web', 'web_port': 0}
     node = launch(executable, params)
+    wait_until(lambda: handles_sigterm(node.proc.pid), 20, 0.005, 'py_vision to start')
     time.sleep(delay)  # deliberately not a synchronisation: the signal must land mid start-up
     assert node.stop(signal.SIGINT, timeout=3) == 0, node.output()
     assert 'Traceback' not in node.output()
+
+
+@pytest.mark.parametrize('device', ['synthetic', 'file'])
+def test_slow_stream_stops_at_once_and_releases_the_camera(launch, peer, tmp_path, device):
+    if device == 'file':
+        device = str(tmp_path / 'clip.avi')
+        writer = cv2.VideoWriter(device, cv2.VideoWriter_fourcc(*'MJPG'), 5.0, (64, 48))
+        writer.write(np.zeros((48, 64, 3), np.uint8))
+        writer.release()
+    received = peer.collect(Image, 'usb_camera/image', RELIABLE)
+    # One frame every 5 s: the capture thread spends nearly all its time waiting for a frame.
+    publisher = launch('usbcam_publisher', {'video_device': device, 'framerate': 0.2})
+    wait_until(lambda: received, 30, what='the first frame')
+    assert publisher.stop(signal.SIGINT, timeout=2) == 0
+    out = publisher.output()
+    assert 'Traceback' not in out and re.search(r'camera released after [1-9]\d* frames', out)
 
 
 @pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
@@ -242,9 +268,7 @@ def test_web_viewer_port_is_released_on_shutdown(launch, sig):
         port = probe.getsockname()[1]
     node = launch('usbcam_subscriber', {'display': 'web', 'web_port': port})
     node.wait_for_output('browser viewer at http://127.0.0.1:%d/' % port, 20)
-    started = time.monotonic()
     assert node.stop(sig, timeout=3) == 0
-    assert time.monotonic() - started < 1.5, 'a node must end within about a second'
     with socket.socket() as again:
         again.bind(('127.0.0.1', port))
 

@@ -90,13 +90,21 @@ def test_subscriber_reports_received_frames(launch):
 
 
 @pytest.mark.parametrize('publisher_reliability', ['reliable', 'best_effort'])
-def test_subscriber_hears_either_publisher_reliability(launch, publisher_reliability):
-    # The subscriber starts first, as it often does: it must still match the publisher.
+def test_subscriber_hears_either_publisher_reliability(launch, peer, publisher_reliability):
+    # The subscriber starts first, as it often does: it must still match the publisher, and
+    # be reliable exactly when the publisher is.
     subscriber = launch('usbcam_subscriber', {'display': 'none', 'stats_period': 1.0})
     subscriber.wait_for_output('no frames on /usb_camera/image', 20)
     launch('usbcam_publisher', {'video_device': 'synthetic', 'framerate': 20.0,
                                 'reliability': publisher_reliability})
     subscriber.wait_for_output(r'received [1-9]\d* frames', 30)
+    wanted = {'reliable': ReliabilityPolicy.RELIABLE,
+              'best_effort': ReliabilityPolicy.BEST_EFFORT}[publisher_reliability]
+
+    def subscription_reliability():
+        infos = peer.node.get_subscriptions_info_by_topic('/usb_camera/image')
+        return [i.qos_profile.reliability for i in infos if i.node_name == 'usbcam_subscriber']
+    wait_until(lambda: subscription_reliability() == [wanted], 10, what='matching reliability')
 
 
 def test_video_file_is_published_and_loops(launch, peer, tmp_path):

@@ -29,12 +29,23 @@ W, H = 96, 64
 
 
 def ramp(dtype, channels, top):
-    """Return a horizontal ramp from 0 to top: visible structure after display scaling."""
+    """
+    Return a horizontal ramp from 0 to top: visible structure after display scaling.
+
+    In colour, the first channel rises and the third falls, so the channel order shows.
+    """
     row = np.linspace(0, top, W).astype(dtype)
     image = np.tile(row, (H, 1))
-    return image if channels == 1 else np.dstack([image] * channels)
+    if channels == 1:
+        return image
+    falling = image[:, ::-1]
+    planes = [image, np.full_like(image, top // 2), falling] + [np.full_like(image, top)] * (
+        channels - 3)
+    return np.dstack(planes)
 
 
+# Where the ramp's first channel is: shown in red for rgb, in blue for bgr.
+RED_RISES = {'rgb8': True, 'bgra8': False}
 CASES = {
     'mono8': ramp(np.uint8, 1, 255),
     'mono16': ramp(np.uint16, 1, 65535),
@@ -42,7 +53,7 @@ CASES = {
     'rgb8': ramp(np.uint8, 3, 255),
     'bgra8': ramp(np.uint8, 4, 255),
     'bayer_rggb8': ramp(np.uint8, 1, 255),
-    '16UC1': ramp(np.uint16, 1, 1000),
+    '16UC1': ramp(np.uint16, 1, 1000),  # a depth image in millimetres
 }
 
 
@@ -80,9 +91,14 @@ def test_every_encoding_is_shown_as_a_colour_image(viewer):
         jpeg = cv2.imdecode(np.frombuffer(get(url + 'snapshot.jpg'), np.uint8),
                             cv2.IMREAD_COLOR)
         assert jpeg.shape == (H, W, 3), encoding
-        # The ramp survives display conversion: dark on the left, bright on the right.
-        grey = cv2.cvtColor(jpeg, cv2.COLOR_BGR2GRAY).astype(int)
-        assert grey[:, -8:].mean() - grey[:, :8].mean() > 100, encoding
+        if encoding in RED_RISES:
+            # Colour order kept: the rising channel is on the right in red (rgb) or blue (bgr).
+            blue, red = jpeg[:, -8:, 0].mean(), jpeg[:, -8:, 2].mean()
+            assert (red > blue + 100) == RED_RISES[encoding], (encoding, red, blue)
+        else:
+            # The ramp survives display conversion: dark on the left, bright on the right.
+            grey = cv2.cvtColor(jpeg, cv2.COLOR_BGR2GRAY).astype(int)
+            assert grey[:, -8:].mean() - grey[:, :8].mean() > 100, encoding
     assert 'Traceback' not in subscriber.output()
 
 
