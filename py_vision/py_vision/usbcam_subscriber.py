@@ -90,7 +90,7 @@ class VideoSubscriber(Node):
             self.get_logger().error(self._last_error)
 
     def report_stats(self):
-        """Log one line: what arrived in the last period, and any problems."""
+        """Log one line: frames received so far, rate and latency lately, and any problems."""
         s = self.stats.snapshot()
         topic = self.subscription_.topic_name
         if s['latency_ms_p50'] is None:
