@@ -52,7 +52,7 @@ class CvBridgeTest(Node):
         # gives, and both reliable and best-effort subscribers (rqt_image_view) receive it.
         self.publisher_ = self.create_publisher(Image, 'cv_bridge_image', publisher_qos())
         self.subscription_ = ImageSubscription(self, Image, 'usb_camera/image', self.callback)
-        self.display.follow_stats(self, self.stats, self.publisher_.topic_name)
+        self.display.attach(self, self.stats, self.publisher_.topic_name)
         self.get_logger().info('drawing on images from %s, publishing them on %s' % (
             self.subscription_.topic_name, self.publisher_.topic_name))
 

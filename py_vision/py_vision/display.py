@@ -20,6 +20,7 @@ support) and the browser viewer otherwise, which is what a board without a scree
 """
 
 import os
+import socket
 import sys
 
 import cv2
@@ -28,13 +29,35 @@ from py_vision.web_viewer import WebViewer, WebViewerError
 
 DISPLAYS = ('auto', 'window', 'web', 'none')
 WEB_STATS_PERIOD_S = 1.0
+WINDOW_EVENTS_PERIOD_S = 0.05
+
+
+def _x_server_reachable(display):
+    """Return True when the X server DISPLAY names accepts connections."""
+    host, _, screen = display.rpartition(':')
+    number = screen.split('.')[0]
+    if not number.isdigit():
+        return False
+    if host in ('', 'unix'):
+        return os.path.exists('/tmp/.X11-unix/X' + number)
+    try:
+        socket.create_connection((host, 6000 + int(number)), timeout=0.5).close()
+    except OSError:
+        return False
+    return True
 
 
 def window_unavailable_reason():
     """Return why no OpenCV window can be opened here, or None when one can."""
-    if sys.platform.startswith('linux') and not (
-            os.environ.get('DISPLAY') or os.environ.get('WAYLAND_DISPLAY')):
-        return 'no DISPLAY is set (no screen, or ssh without X forwarding)'
+    display = os.environ.get('DISPLAY')
+    wayland = os.environ.get('WAYLAND_DISPLAY')
+    if sys.platform.startswith('linux'):
+        if not (display or wayland):
+            return 'no DISPLAY is set (no screen, or ssh without X forwarding)'
+        # A GUI OpenCV aborts the whole process when its X server is gone (a stale DISPLAY
+        # after an ssh reconnect): check before it tries.
+        if display and not wayland and not _x_server_reachable(display):
+            return 'the X server of DISPLAY=%s cannot be reached' % display
     try:
         cv2.namedWindow('py_vision', cv2.WINDOW_AUTOSIZE)
         cv2.destroyWindow('py_vision')
@@ -84,11 +107,14 @@ class Display:
             self.viewer = viewer
             logger.info('browser viewer at %s' % viewer.url)
 
-    def follow_stats(self, node, stats, topic):
-        """Have the browser viewer show stats (a StreamStats) of topic, updated every second."""
+    def attach(self, node, stats, topic):
+        """Start the node's timers: the viewer's statistics of topic, the window's events."""
         if self.viewer is not None:
             node.create_timer(WEB_STATS_PERIOD_S, lambda: self.viewer.set_stats(
                 dict(stats.snapshot(), topic=topic)))
+        if self.window_title is not None:
+            # The window repaints and answers its close button also when no frame arrives.
+            node.create_timer(WINDOW_EVENTS_PERIOD_S, lambda: cv2.waitKey(1))
 
     @property
     def active(self):

@@ -53,7 +53,7 @@ class VideoSubscriber(Node):
         self.display = Display(self.get_logger(), display, web_host, web_port, 'usb_camera/image')
         self.subscription_ = ImageSubscription(self, Image, 'usb_camera/image', self.callback)
         self._stats_timer = self.create_timer(self.stats_period, self.report_stats)
-        self.display.follow_stats(self, self.stats, self.subscription_.topic_name)
+        self.display.attach(self, self.stats, self.subscription_.topic_name)
 
     def _set_stats_period(self, period):
         self.stats_period = period
