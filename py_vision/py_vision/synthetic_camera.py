@@ -57,6 +57,19 @@ _now = time.monotonic
 _sleep = time.sleep
 
 _BLACK = 16
+# The digits 0-9, seven rows of five pixels each.
+_FONT_5X7 = (
+    '01110 10001 10011 10101 11001 10001 01110',
+    '00100 01100 00100 00100 00100 00100 01110',
+    '01110 10001 00001 00010 00100 01000 11111',
+    '11110 00001 00001 01110 00001 00001 11110',
+    '00010 00110 01010 10010 11111 00010 00010',
+    '11111 10000 11110 00001 00001 10001 01110',
+    '00110 01000 10000 11110 10001 10001 01110',
+    '11111 00001 00010 00100 01000 01000 01000',
+    '01110 10001 10001 01110 10001 10001 01110',
+    '01110 10001 10001 01111 00001 00010 01100',
+)
 _WHITE = 235
 _STRIP = 40
 _CODE_ROWS, _CODE_COLS = 4, 11
@@ -162,22 +175,19 @@ class _Layout:
 
     def _make_glyphs(self):
         x0, y0, area_w, area_h = self.geo.digits_area
-        font = cv2.FONT_HERSHEY_SIMPLEX
-        thickness = max(1, area_h // 12)
-        (text_w, text_h), _ = cv2.getTextSize('0', font, 1.0, thickness)
-        # The text fills 70% of the strip height, shrunk if six digits would not fit.
-        scale = min(0.7 * area_h / text_h, area_w / (6 * 1.15 * text_w))
-        if scale * text_h < 5:
+        # A built-in 5x7 font, not cv2.putText, so that a frame is the same bytes whatever
+        # OpenCV draws it (4.x and 5.x render Hershey text differently).
+        scale = int(0.7 * area_h) // 7
+        if scale < 1:
             return
-        cell_w = max(2, int(math.ceil(1.15 * text_w * scale)))
+        cell_w = 6 * scale
         count = min(10, area_w // cell_w)
-        baseline_y = (area_h + int(round(text_h * scale))) // 2
-        glyphs = np.empty((10, area_h, cell_w), np.uint8)
-        for digit in range(10):
-            mask = np.zeros((area_h, cell_w), np.uint8)
-            cv2.putText(mask, str(digit), (max(0, cell_w // 12), baseline_y), font, scale, 255,
-                        thickness, cv2.LINE_AA)
-            glyphs[digit] = (_STRIP + mask.astype(np.uint16) * (_WHITE - _STRIP) // 255)
+        top = (area_h - 7 * scale) // 2
+        glyphs = np.full((10, area_h, cell_w), _STRIP, np.uint8)
+        for digit, rows in enumerate(_FONT_5X7):
+            bits = np.array([[ch == '1' for ch in row] for row in rows.split()], bool)
+            pixels = np.kron(bits, np.ones((scale, scale), bool))
+            glyphs[digit, top:top + 7 * scale, scale // 2:scale // 2 + 5 * scale][pixels] = _WHITE
         self.glyphs = glyphs
         self.blank = np.full_like(glyphs[0], _STRIP)
         self.digit_count = count
@@ -446,6 +456,7 @@ class SyntheticCamera:
         self._base = 0
         self._grabbed = None
         self._buf = None
+        self._rendered = None
         self._state = _device_state((name, stop_after, unplugged_for, fail_every))
         self._opened = not fail_open
         if fail_open:
@@ -468,6 +479,7 @@ class SyntheticCamera:
         """Close the device; reads fail afterwards."""
         self._opened = False
         self._buf = None
+        self._rendered = None
         self._grabbed = None
 
     def interrupt(self):
@@ -489,6 +501,10 @@ class SyntheticCamera:
         if not self._opened or self._unplugged():
             return False
         starting = not self._pacer.running
+        if not starting:
+            # A sensor's frame exists at its capture time: build the YUYV buffer of the frame
+            # expected next before waiting for it, so only the BGR conversion follows the stamp.
+            self._render(self._base + self._pacer.next)
         number, due = self._pacer.wait()
         if self._pacer.cancelled.is_set():
             return False
@@ -516,12 +532,17 @@ class SyntheticCamera:
         """Return the grabbed frame as BGR (a new array each call)."""
         if self._grabbed is None or not self._opened:
             return False, None
+        if self._rendered != self._grabbed:
+            self._render(self._grabbed)
+        return True, yuyv_to_bgr(self._buf)
+
+    def _render(self, index):
         layout = _layout(self._width, self._height)
         fresh = self._buf is None or self._buf.shape != layout.background.shape
         if fresh:
             self._buf = layout.background.copy()
-        layout.render(self._grabbed, self._buf, fresh)
-        return True, yuyv_to_bgr(self._buf)
+        layout.render(index, self._buf, fresh)
+        self._rendered = index
 
     def read(self, image=None):
         """Grab and retrieve: (True, BGR image) or (False, None)."""
@@ -553,6 +574,7 @@ class SyntheticCamera:
             return False
         if changed:
             self._pacer.restart()
+            self._rendered = None
         return True
 
     def get(self, prop_id):

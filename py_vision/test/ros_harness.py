@@ -153,12 +153,16 @@ class NodeProcess:
         return self.proc.returncode
 
     def kill(self):
+        """
+        End the process if it still runs: Ctrl-C first, SIGKILL only if that fails.
+
+        A SIGKILLed node leaves its Fast DDS shared-memory segment in /dev/shm behind.
+        """
         if self.proc.poll() is None:
             try:
-                os.killpg(self.proc.pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
-            self.proc.wait()
+                self.stop(signal.SIGINT, timeout=5.0)
+            except AssertionError:
+                pass  # stop() has killed it
         self._log.close()
 
 
