@@ -24,10 +24,9 @@ every frame it published to OUT.json.
 import sys
 import time
 
-from bench_common import monotonic, StopFlag, write_json
+from bench_common import image_qos, monotonic, StopFlag, write_json
 from py_vision.synthetic_camera import synthetic_frame
 import rclpy
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import Image
 
@@ -56,9 +55,7 @@ def main():
     rclpy.init(args=sys.argv[6:], signal_handler_options=SignalHandlerOptions.NO)
     stop = StopFlag()
     node = rclpy.create_node('bare_image_publisher')
-    qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=(
-        ReliabilityPolicy.RELIABLE if reliability == 'reliable'
-        else ReliabilityPolicy.BEST_EFFORT))
+    qos = image_qos(reliability)
     publisher = node.create_publisher(Image, 'usb_camera/image', qos)
     messages = build_messages(width, height)
     clock = node.get_clock()

@@ -24,12 +24,12 @@ the callback. Prints FIRST_FRAME_MARK at the first frame and writes OUT.json on 
 
 import sys
 
-from bench_common import announce_first_frame, monotonic, StopFlag, write_json
+from bench_common import (announce_first_frame, image_qos, monotonic, StopFlag,
+                          write_json)
 import numpy as np
 from py_vision.synthetic_camera import read_frame_index
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import Image
 
@@ -64,9 +64,7 @@ def main():
     rclpy.init(args=sys.argv[3:], signal_handler_options=SignalHandlerOptions.NO)
     stop = StopFlag()
     node = rclpy.create_node('bare_image_subscriber')
-    qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=(
-        ReliabilityPolicy.RELIABLE if reliability == 'reliable'
-        else ReliabilityPolicy.BEST_EFFORT))
+    qos = image_qos(reliability)
     recorder = Recorder(node)
     node.create_subscription(Image, 'usb_camera/image', recorder.callback, qos)
     executor = SingleThreadedExecutor()

@@ -21,9 +21,13 @@ frame in memory and writes them as JSON to the file named by its caller when it 
 
 import json
 import os
+from pathlib import Path
+import platform
 import signal
 import threading
 import time
+
+RESULTS = Path(__file__).resolve().parent / 'results'
 
 
 FIRST_FRAME_MARK = 'BENCH first frame'
@@ -50,6 +54,26 @@ def write_json(path, data):
     with open(tmp, 'w') as stream:
         json.dump(data, stream)
     os.replace(tmp, path)
+
+
+def save_results(name, result):
+    """Write bench/results/<name>.json: result plus the versions it was measured with."""
+    import cv2
+    import numpy as np
+    result = dict(result, python=platform.python_version(), numpy=np.__version__,
+                  opencv=cv2.__version__, machine=platform.machine())
+    RESULTS.mkdir(exist_ok=True)
+    out = RESULTS / (name + '.json')
+    out.write_text(json.dumps(result, indent=2) + '\n')
+    print('\nwrote %s' % out)
+
+
+def image_qos(reliability):
+    """Return the reference's QoS: keep last 10, 'reliable' or best effort."""
+    from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=(
+        ReliabilityPolicy.RELIABLE if reliability == 'reliable'
+        else ReliabilityPolicy.BEST_EFFORT))
 
 
 def announce_first_frame():

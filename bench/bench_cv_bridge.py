@@ -20,19 +20,17 @@ Run from the repository root: ``.venv/bin/python bench/bench_cv_bridge.py``. Pri
 table of medians and writes bench/results/cv_bridge.json.
 """
 
-import json
 from pathlib import Path
-import platform
 import statistics
 import sys
 import time
 
-import cv2
 import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO / 'py_vision'))
 
+from bench_common import save_results  # noqa: E402,I100
 from py_vision.cv_bridge import CvBridge  # noqa: E402
 from sensor_msgs.msg import Image  # noqa: E402
 from std_msgs.msg import Header  # noqa: E402
@@ -110,12 +108,7 @@ def main():
     for row in rows:
         print('| %s | %s | %.1f us | %.2f |' % (
             row['size'], row['case'], row['median_us'], row['vs_numpy_copy']))
-    result = {'python': platform.python_version(), 'numpy': np.__version__,
-              'opencv': cv2.__version__, 'machine': platform.machine(), 'rows': rows}
-    out = REPO / 'bench' / 'results' / 'cv_bridge.json'
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(result, indent=2) + '\n')
-    print('\nwrote %s' % out.relative_to(REPO))
+    save_results('cv_bridge', {'rows': rows})
 
 
 if __name__ == '__main__':

@@ -21,19 +21,17 @@ the YUYV to BGR conversion alone, which OpenCV's V4L2 backend pays for every fra
 camera too. Prints a Markdown table of medians and writes bench/results/synthetic.json.
 """
 
-import json
 from pathlib import Path
-import platform
 import statistics
 import sys
 import time
 
 import cv2
-import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO / 'py_vision'))
 
+from bench_common import save_results  # noqa: E402,I100
 from py_vision import synthetic_camera  # noqa: E402
 
 SIZES = [(640, 480), (1280, 720), (1920, 1080)]
@@ -112,14 +110,9 @@ def main():
     cpu, achieved = paced_cpu_percent(width, height, fps, seconds)
     print('\npaced read() loop, %dx%d at %g fps for %g s: %.1f fps, %.1f%% of one core'
           % (width, height, fps, seconds, achieved, cpu))
-    result = {'python': platform.python_version(), 'numpy': np.__version__,
-              'opencv': cv2.__version__, 'machine': platform.machine(), 'rows': rows,
-              'paced': {'size': '%dx%d' % (width, height), 'fps': fps,
-                        'achieved_fps': achieved, 'cpu_percent_of_one_core': cpu}}
-    out = REPO / 'bench' / 'results' / 'synthetic.json'
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(result, indent=2) + '\n')
-    print('\nwrote %s' % out.relative_to(REPO))
+    paced = {'size': '%dx%d' % (width, height), 'fps': fps, 'achieved_fps': achieved,
+             'cpu_percent_of_one_core': cpu}
+    save_results('synthetic', {'rows': rows, 'paced': paced})
 
 
 if __name__ == '__main__':
