@@ -25,7 +25,7 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        ('share/' + package_name + '/config', glob('config/*.xml')),
+        ('share/' + package_name + '/config', glob('config/*.xml') + glob('config/*.yaml')),
     ],
     install_requires=['setuptools'],
     zip_safe=True,
