@@ -24,7 +24,8 @@ import socket
 import sys
 
 import cv2
-from py_vision.node_main import ConfigError
+import numpy as np
+from py_vision.params import ConfigError
 from py_vision.web_viewer import WebViewer, WebViewerError
 
 DISPLAYS = ('auto', 'window', 'web', 'none')
@@ -64,20 +65,6 @@ def window_unavailable_reason():
     except cv2.error:
         return 'this OpenCV has no GUI support (opencv-python-headless)'
     return None
-
-
-def declare_display_parameters(params, default):
-    """Declare `display`, `web_host` and `web_port`; return their checked values."""
-    display = params.declare(
-        'display', default, 'where to show frames', check=DISPLAYS.__contains__,
-        accepted=', '.join(DISPLAYS))
-    web_host = params.declare(
-        'web_host', '127.0.0.1', 'address the browser viewer listens on', check=bool,
-        accepted='an IP address or host name')
-    web_port = params.declare(
-        'web_port', 8080, 'port of the browser viewer', check=lambda v: 0 <= v <= 65535,
-        accepted='0..65535 (0: any free port)')
-    return display, web_host, web_port
 
 
 class Display:
@@ -121,6 +108,11 @@ class Display:
         """Return True when frames are shown somewhere (so they need converting)."""
         return self.window_title is not None or self.viewer is not None
 
+    @property
+    def needs_pixels(self):
+        """Return True when showing a JPEG needs it decoded (a window; the viewer does not)."""
+        return self.window_title is not None
+
     def show(self, image):
         """Show one bgr8 (or mono8) frame; cheap when nobody watches the browser viewer."""
         if self.window_title is not None:
@@ -128,6 +120,14 @@ class Display:
             cv2.waitKey(1)
         if self.viewer is not None:
             self.viewer.submit(image)
+
+    def show_jpeg(self, jpeg, image=None):
+        """Show a JPEG frame: the viewer forwards its bytes, a window shows image (decoded)."""
+        if self.window_title is not None and image is not None:
+            cv2.imshow(self.window_title, image)
+            cv2.waitKey(1)
+        if self.viewer is not None:
+            self.viewer.submit_jpeg(np.asarray(jpeg, np.uint8).tobytes())
 
     def close(self):
         """Close the window, or stop the viewer and release its port."""

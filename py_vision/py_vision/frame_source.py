@@ -16,22 +16,50 @@
 """
 Open what the `video_device` parameter names: a camera, a video file or the synthetic source.
 
-`open_capture` returns an object with OpenCV's VideoCapture interface (isOpened, read, set, get,
-release). `SyntheticCamera` and `VideoFileSource` also have `last_index` and
-`last_capture_time` (time.monotonic() of the capture); a plain ``cv2.VideoCapture`` has not, so
-callers use ``getattr(cap, 'last_capture_time', None)`` and fall back to the time read()
-returned.
+`open_capture` returns a `CaptureSource`: OpenCV's VideoCapture interface (isOpened, read, set,
+get, release) plus what a driver needs from every source alike: the capture time and source
+index of the last frame, the camera's controls with their ranges, and interrupt() to end a
+read that waits for its frame. V4L2 cameras are OpenCV captures wrapped in `V4L2Source`, which
+reads the driver's buffer timestamps and asks the device itself for its controls' ranges
+(OpenCV has no call for that); the synthetic camera and video files implement it directly.
 """
 
 import contextlib
+import fcntl
 import os
 import stat
+import struct
 import sys
+import time
+from typing import Dict, Optional, Protocol, Tuple
 
 import cv2
 import numpy as np
 
-from py_vision.synthetic_camera import FramePacer, is_synthetic_spec, open_synthetic
+from py_vision.synthetic_camera import (
+    Control, CONTROLS, FramePacer, is_synthetic_spec, open_synthetic)
+
+
+class CaptureSource(Protocol):
+    """What usbcam_publisher's camera layer uses from a frame source."""
+
+    last_index: Optional[int]          # source frame number of the last frame read, if known
+    last_capture_time: Optional[float]  # its capture time, time.monotonic(), if known
+
+    def isOpened(self) -> bool: ...  # noqa: N802, D102 (OpenCV's interface)
+
+    def read(self) -> Tuple[bool, Optional[np.ndarray]]: ...  # noqa: D102
+
+    def set(self, prop_id: int, value: float) -> bool: ...  # noqa: A003, D102
+
+    def get(self, prop_id: int) -> float: ...  # noqa: D102
+
+    def release(self) -> None: ...  # noqa: D102
+
+    def interrupt(self) -> None: ...  # noqa: D102
+
+    def controls(self) -> Dict[str, Control]: ...  # noqa: D102
+
 
 _DEFAULT_FILE_FPS = 30.0
 
@@ -66,7 +94,7 @@ def _request(cap, width, height, fps):
         cap.set(cv2.CAP_PROP_FPS, fps)
 
 
-def _open_camera(video_device, target, width, height, fps):
+def _open_camera(video_device, target, node, width, height, fps):
     """Open a V4L2 device (a path or an index) through OpenCV."""
     backend = cv2.CAP_V4L2 if sys.platform.startswith('linux') else cv2.CAP_ANY
     with _quiet_opencv():
@@ -79,7 +107,90 @@ def _open_camera(video_device, target, width, height, fps):
         raise SourceError('cannot open video_device "%s": the device exists but does not open '
                           '(busy in another program, or not a video capture device)'
                           % video_device)
-    return cap
+    return V4L2Source(cap, node)
+
+
+# struct v4l2_queryctrl: id, type, name[32], minimum, maximum, step, default_value, flags,
+# reserved[2]; VIDIOC_QUERYCTRL = _IOWR('V', 36, struct v4l2_queryctrl).
+_QUERYCTRL = struct.Struct('=II32siiiiI8x')
+_VIDIOC_QUERYCTRL = (3 << 30) | (_QUERYCTRL.size << 16) | (ord('V') << 8) | 36
+_CTRL_FLAG_DISABLED = 0x0001
+_USER, _CAMERA = 0x00980900, 0x009A0900
+_V4L2_CONTROL_IDS = {
+    'brightness': _USER + 0, 'contrast': _USER + 1, 'saturation': _USER + 2,
+    'auto_white_balance': _USER + 12, 'gain': _USER + 19, 'white_balance': _USER + 26,
+    'sharpness': _USER + 27, 'auto_exposure': _CAMERA + 1, 'exposure': _CAMERA + 2,
+    'focus': _CAMERA + 10, 'autofocus': _CAMERA + 12,
+}
+
+
+def query_v4l2_controls(path):
+    """Return the controls a V4L2 device has, with their ranges (VIDIOC_QUERYCTRL)."""
+    found = {}
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_NONBLOCK)
+    except OSError:
+        return found
+    try:
+        for name, cid in _V4L2_CONTROL_IDS.items():
+            query = bytearray(_QUERYCTRL.pack(cid, 0, b'', 0, 0, 0, 0, 0))
+            try:
+                fcntl.ioctl(fd, _VIDIOC_QUERYCTRL, query)
+            except OSError:
+                continue  # the device has no such control
+            _, _, _, low, high, _, default, flags = _QUERYCTRL.unpack(query)
+            if not flags & _CTRL_FLAG_DISABLED:
+                found[name] = Control(CONTROLS[name].prop, low, high, default)
+    finally:
+        os.close(fd)
+    return found
+
+
+class V4L2Source:
+    """A V4L2 camera opened by OpenCV, with the driver's capture times and its controls."""
+
+    def __init__(self, cap, node):
+        self._cap = cap
+        self._node = node
+        self._controls = None
+        self.last_index = None
+        self.last_capture_time = None
+
+    def isOpened(self):  # noqa: N802 (OpenCV's name)
+        """Return True while the device is open."""
+        return self._cap.isOpened()
+
+    def read(self):
+        """Read a frame; its capture time is the driver's buffer timestamp when plausible."""
+        ok, frame = self._cap.read()
+        self.last_capture_time = None
+        if ok:
+            # OpenCV's V4L2 backend gives the buffer's CLOCK_MONOTONIC time in ms here.
+            captured = self._cap.get(cv2.CAP_PROP_POS_MSEC) / 1e3
+            if 0 <= time.monotonic() - captured < 1.0:
+                self.last_capture_time = captured
+        return ok, frame
+
+    def set(self, prop_id, value):  # noqa: A003 (OpenCV's name)
+        """Set an OpenCV capture property; False when the driver refuses."""
+        return bool(self._cap.set(prop_id, value))
+
+    def get(self, prop_id):
+        """Return an OpenCV capture property."""
+        return float(self._cap.get(prop_id))
+
+    def release(self):
+        """Close the device."""
+        self._cap.release()
+
+    def interrupt(self):
+        """Nothing to do: a V4L2 read returns within one frame period."""
+
+    def controls(self):
+        """Return the device's controls and their ranges, asked once from the driver."""
+        if self._controls is None:
+            self._controls = query_v4l2_controls(self._node) if self._node else {}
+        return dict(self._controls)
 
 
 def _device_problem(path):
@@ -121,7 +232,7 @@ def open_capture(video_device, width, height, fps):
             if problem:
                 raise SourceError('cannot open video_device "%s": %s: %s'
                                   % (device, node, problem))
-        return _open_camera(device, index, width, height, fps)
+        return _open_camera(device, index, node, width, height, fps)
     try:
         mode = os.stat(device).st_mode
     except FileNotFoundError:
@@ -134,7 +245,7 @@ def open_capture(video_device, width, height, fps):
         problem = _device_problem(device)
         if problem:
             raise SourceError('cannot open video_device "%s": %s' % (device, problem))
-        return _open_camera(device, device, width, height, fps)
+        return _open_camera(device, device, device, width, height, fps)
     if stat.S_ISREG(mode):
         if not os.access(device, os.R_OK):
             raise SourceError('cannot open video_device "%s": permission denied' % device)
@@ -224,6 +335,10 @@ class VideoFileSource:
     def interrupt(self):
         """Make a read() waiting for its frame in another thread fail at once, and later ones."""
         self._pacer.cancel()
+
+    def controls(self):
+        """Return no controls: a file has none."""
+        return {}
 
     def grab(self):
         """Wait until the next frame is due and read it from the file; False on failure."""

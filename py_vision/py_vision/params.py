@@ -13,86 +13,216 @@
 # limitations under the License.
 
 """
-Parameter declaration and checking shared by the nodes.
+The nodes' parameters as ROS users see them: typed, with ranges, checked, documented.
 
-Each node declares its parameters in one place through `declare()`, which attaches a
-description and accepts the types users actually type on the command line: `framerate:=30`
-arrives as an integer and is taken as 30.0. A value that cannot be used raises ConfigError
-naming the parameter and what it accepts.
+Each node lists its parameters once, as a tuple of `Spec` (class attribute ``PARAMETERS``), so
+that ``--help`` can print them without starting the node. `Parameters.declare()` declares one
+with its real type and a descriptor carrying the description, the range (IntegerRange or
+FloatingPointRange, shown by ``ros2 param describe``) and read-only unless it can change live.
+
+What users type on the command line is taken for what they mean: ``framerate:=15`` (an integer
+to ROS) is the double 15.0 and ``video_device:=0`` the string '0'. A value that cannot be used
+raises ConfigError naming the parameter and what it accepts.
 """
 
-from py_vision.node_main import ConfigError
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from dataclasses import dataclass
+import math
+from typing import Any, Callable, Dict, Optional, Sequence, Tuple
+
+from rcl_interfaces.msg import (
+    FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
 from rclpy.parameter import Parameter
 
-_KINDS = {
-    float: ('a number', (int, float)),
-    int: ('an integer', (int,)),
-    str: ('a string', (str,)),
-}
+
+class ConfigError(Exception):
+    """A parameter or a device the user gave cannot be used; the message says which and why."""
 
 
-def coerce(name, value, kind, check=None, accepted=''):
-    """Return value converted to kind, or raise ConfigError naming the parameter."""
-    label, types = _KINDS[kind]
-    if isinstance(value, bool) or not isinstance(value, types):
-        raise ConfigError('parameter %s must be %s%s, got %r' % (
-            name, label, ' (%s)' % accepted if accepted else '', value))
-    value = kind(value)
-    if check is not None and not check(value):
-        raise ConfigError('parameter %s: %r is not accepted; expected %s' % (
-            name, value, accepted))
-    return value
+_TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER,
+          float: Parameter.Type.DOUBLE, str: Parameter.Type.STRING}
+_TYPE_WORDS = {bool: 'a boolean', int: 'an integer', float: 'a number', str: 'a string'}
+_TYPE_NAMES = {bool: 'bool', int: 'integer', float: 'double', str: 'string'}
+
+
+@dataclass(frozen=True)
+class Spec:
+    """
+    One parameter of a node.
+
+    `default` is its value, or a type (int, float, bool) for a parameter that is not set unless
+    the user sets it (a camera control left at the camera's own value). `value_range` is
+    inclusive; `choices` lists the accepted strings; `check` is any further condition, with
+    `accepted` saying in words what passes it. A `live` parameter can be changed while the node
+    runs (`ros2 param set`); the others are read-only.
+    """
+
+    name: str
+    default: Any
+    description: str
+    value_range: Optional[Tuple[float, float]] = None
+    choices: Tuple[str, ...] = ()
+    check: Optional[Callable[[Any], bool]] = None
+    accepted: str = ''
+    live: bool = False
+
+    @property
+    def kind(self) -> type:
+        """Return the parameter's Python type: bool, int, float or str."""
+        return self.default if isinstance(self.default, type) else type(self.default)
+
+    @property
+    def optional(self) -> bool:
+        """Return True for a parameter that has no value unless the user gives one."""
+        return isinstance(self.default, type)
+
+    def accepts(self) -> str:
+        """Return what the parameter accepts, in words."""
+        if self.accepted:
+            return self.accepted
+        if self.choices:
+            return ' or '.join(self.choices)
+        if self.value_range is not None:
+            low, high = self.value_range
+            return '%s..%s' % (_number(low), _number(high))
+        return _TYPE_WORDS[self.kind]
+
+    def coerce(self, value: Any) -> Any:
+        """Return value as this parameter's type, checked; raise ConfigError if unusable."""
+        kind = self.kind
+        if kind is float and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        elif kind is str and isinstance(value, (int, float)) and not isinstance(value, bool):
+            value = str(value)  # video_device:=0 arrives as an integer
+        if type(value) is not kind:
+            raise ConfigError('parameter %s must be %s (%s), got %r' % (
+                self.name, _TYPE_WORDS[kind], self.accepts(), value))
+        good = True
+        if kind is float and not math.isfinite(value):
+            good = False
+        if self.value_range is not None:
+            low, high = self.value_range
+            good = good and low <= value <= high
+        if self.choices and value not in self.choices:
+            good = False
+        if self.check is not None and good:
+            good = bool(self.check(value))
+        if not good:
+            raise ConfigError('parameter %s: %r is not accepted; expected %s' % (
+                self.name, value, self.accepts()))
+        return value
+
+    def descriptor(self) -> ParameterDescriptor:
+        """Return the ROS descriptor: type, description, range, read-only."""
+        descriptor = ParameterDescriptor(
+            name=self.name, type=_TYPES[self.kind].value, description=self.description,
+            read_only=not self.live)
+        constraints = self.accepts() if (self.accepted or self.choices) else ''
+        descriptor.additional_constraints = constraints
+        if self.value_range is not None:
+            low, high = self.value_range
+            if self.kind is int:
+                descriptor.integer_range = [IntegerRange(
+                    from_value=int(low), to_value=int(high), step=1)]
+            elif self.kind is float:
+                descriptor.floating_point_range = [FloatingPointRange(
+                    from_value=float(low), to_value=float(high), step=0.0)]
+        return descriptor
+
+    def help_line(self) -> str:
+        """Return the parameter as one --help entry."""
+        default = "not set (the camera's own value)" if self.optional else repr(self.default)
+        return '  %s (%s, %s; default %s%s)\n      %s' % (
+            self.name, _TYPE_NAMES[self.kind], self.accepts(), default,
+            '; settable live' if self.live else '', self.description)
+
+
+def _number(value):
+    return ('%d' % value) if float(value).is_integer() else ('%g' % value)
+
+
+def help_text(executable: str, specs: Sequence[Spec], summary: str) -> str:
+    """Return the --help text of a node: what it does and its parameters."""
+    lines = ['usage: ros2 run py_vision %s [--ros-args -p NAME:=VALUE ... '
+             '| --params-file FILE | -r FROM:=TO ...]' % executable, '', summary, '',
+             'parameters:']
+    lines += [spec.help_line() for spec in specs]
+    return '\n'.join(lines) + '\n'
+
+
+def viewer_specs(display_default: str, displays: Sequence[str]) -> Tuple[Spec, ...]:
+    """Return the parameters of a node that shows frames: display, web_host, web_port."""
+    return (
+        Spec('display', display_default, 'where to show frames: an OpenCV window, the browser '
+             'viewer, nowhere, or auto (a window where possible, else the browser viewer)',
+             choices=tuple(displays)),
+        Spec('web_host', '127.0.0.1', 'address the browser viewer listens on', check=bool,
+             accepted='an IP address or host name'),
+        Spec('web_port', 8080, 'port of the browser viewer (0: any free port)', (0, 65535)),
+    )
 
 
 class Parameters:
-    """Declares a node's parameters and reads them checked and typed."""
+    """Declares a node's parameters; applies live ones when `ros2 param set` changes them."""
 
     def __init__(self, node):
         self._node = node
-        self._specs = {}
+        self._specs: Dict[str, Tuple[Spec, Optional[Callable[[Any], None]]]] = {}
         self._declaring = False
         node.add_on_set_parameters_callback(self._on_set)
 
-    def declare(self, name, default, description, check=None, accepted='', on_change=None):
+    def declare(self, spec: Spec, on_change: Optional[Callable[[Any], None]] = None) -> Any:
         """
-        Declare a parameter; return its checked value (ConfigError if it is unusable).
+        Declare spec's parameter with its real type; return its checked value (None: not set).
 
-        A parameter with an on_change(value) callback can be set at run time (`ros2 param
-        set`); it is checked like at start-up and the callback applies it. The others are
-        read-only, and rclpy refuses to change them with a reason saying so.
+        A live parameter needs on_change(value), which applies a new value once it has been
+        checked like at start-up. Raises ConfigError when the start-up value is unusable.
         """
-        kind = type(default)
-        read_only = on_change is None
-        self._specs[name] = (kind, check, accepted, on_change)
-        descriptor = ParameterDescriptor(
-            description=description, read_only=read_only, dynamic_typing=True,
-            additional_constraints=accepted)
-        # rclpy runs the set-callbacks for declarations too; start-up values are checked here.
+        if spec.live and on_change is None:
+            raise ValueError('live parameter %s needs an on_change callback' % spec.name)
+        self._specs[spec.name] = (spec, on_change)
+        node = self._node
         self._declaring = True
         try:
-            value = self._node.declare_parameter(name, default, descriptor).value
+            # Read the user's value untyped first, then declare the parameter statically typed
+            # with that value converted: the declared type is then the real one.
+            probe = ParameterDescriptor(dynamic_typing=True)
+            given = node.declare_parameter(spec.name, None, probe).value
+            node.undeclare_parameter(spec.name)
+            if given is None:
+                if spec.optional:
+                    node.declare_parameter(spec.name, _TYPES[spec.kind], spec.descriptor(),
+                                           ignore_override=True)
+                    return None
+                given = spec.default
+            value = spec.coerce(given)
+            node.declare_parameter(spec.name, value, spec.descriptor(), ignore_override=True)
         finally:
             self._declaring = False
-        return coerce(name, value, kind, check, accepted)
+        return value
 
     def _on_set(self, parameters):
-        # Read-only parameters are refused by rclpy itself; this checks the writable ones and
-        # applies them only when all of them are acceptable.
+        # rclpy itself refuses read-only parameters, wrong types and values out of the range;
+        # this checks the rest and applies the changes only when all of them are acceptable.
+        if self._declaring:
+            return SetParametersResult(successful=True)
         changes = []
-        for parameter in parameters if not self._declaring else ():
-            spec = self._specs.get(parameter.name)
-            if spec is None or spec[3] is None:
+        for parameter in parameters:
+            spec, on_change = self._specs.get(parameter.name, (None, None))
+            if spec is None or on_change is None:
                 continue
-            kind, check, accepted, on_change = spec
             if parameter.type_ == Parameter.Type.NOT_SET:
+                if spec.optional:
+                    return SetParametersResult(
+                        successful=False, reason='parameter %s cannot be unset; restart the '
+                        'node to give the camera its own value back' % parameter.name)
                 return SetParametersResult(
                     successful=False, reason='parameter %s cannot be undeclared' % parameter.name)
             try:
-                changes.append((on_change, coerce(parameter.name, parameter.value, kind, check,
-                                                  accepted)))
+                changes.append((on_change, spec.coerce(parameter.value)))
             except ConfigError as error:
                 return SetParametersResult(successful=False, reason=str(error))
         for on_change, value in changes:
-            on_change(value)
+            reason = on_change(value)
+            if reason:
+                return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)

@@ -12,12 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Received-stream statistics: rate, latency percentiles, gaps and lost frames."""
+"""Received-stream statistics: rate, latency percentiles and gaps."""
 
 import collections
 import time
-
-MAX_COUNTED_GAP = 100000
 
 
 def percentile(sorted_values, fraction):
@@ -34,16 +32,14 @@ class StreamStats:
         self._clock = clock
         self._recent = collections.deque()  # (arrival time, latency in s)
         self.frames = 0
-        self.lost = 0
         self.errors = 0
         self.longest_gap_s = 0.0
         self.width = self.height = 0
         self.encoding = ''
         self._last_arrival = None
-        self._last_index = None
 
-    def add(self, latency_s, width, height, encoding, index=None):
-        """Record one received frame; index is its source frame number when readable."""
+    def add(self, latency_s, width, height, encoding):
+        """Record one received frame: its latency (stamp to arrival), size and encoding."""
         now = self._clock()
         if self._last_arrival is not None:
             self.longest_gap_s = max(self.longest_gap_s, now - self._last_arrival)
@@ -51,13 +47,6 @@ class StreamStats:
         self._recent.append((now, latency_s))
         self.frames += 1
         self.width, self.height, self.encoding = width, height, encoding
-        if index is not None:
-            # A jump too large to be real (a camera image misread as a frame code, or a new
-            # source) re-synchronises instead of counting as lost frames.
-            skipped = index - self._last_index - 1 if self._last_index is not None else 0
-            if 0 < skipped <= MAX_COUNTED_GAP:
-                self.lost += skipped
-            self._last_index = index
 
     def add_error(self):
         """Record one message that could not be used."""
@@ -75,7 +64,6 @@ class StreamStats:
             fps = (len(self._recent) - 1) / span if span > 0 else 0.0
         return {
             'frames': self.frames,
-            'lost': self.lost,
             'errors': self.errors,
             'fps': round(fps, 2),
             'latency_ms_p50': round(percentile(latencies, 0.5) * 1e3, 2) if latencies else None,

@@ -31,15 +31,37 @@ pixels; frames smaller than 64 x 48 (`MIN_CODE_SIZE`) carry the bars and the box
 frame is built from a YUYV background precomputed once per size, and read() returns a new array
 every time (the caller may keep it while the next frame is built).
 
+Like a USB 2.0 UVC camera it offers two pixel formats. YUYV is limited by the bus to 24 MB/s:
+the highest of 30, 25, 20, 15, 10 and 5 fps whose ``width * height * 2`` bytes fit (640x480 at
+30, 1280x720 at 10, 1920x1080 at 5 fps). MJPEG runs at the requested rate at any size. The
+FOURCC is chosen with ``set(CAP_PROP_FOURCC)`` and, as in OpenCV's V4L2 backend, YUYV is the
+format a camera opens with; with ``CAP_PROP_CONVERT_RGB`` off in MJPEG mode, read() returns the
+camera's JPEG bytes as a 1-D uint8 array, otherwise a BGR image. A real camera encodes JPEG in
+hardware, so the synthetic one does not pay for a whole encode per frame: the scene above the
+frame code repeats every 64 frames and is encoded once per cycle position, and only the MCU
+rows of the code strip are encoded per frame and spliced in (restart markers at every MCU row
+make the two encodings' rows interchangeable: the result is the same bytes as a full encode).
+
+Camera controls (`CONTROLS`: brightness, contrast, saturation, sharpness, gain, white balance
+and its auto switch, exposure and auto exposure, focus and autofocus) are set and read through
+set() and get() with V4L2-like ranges (`control_range()`), and change the image visibly and
+deterministically: brightness offsets it, contrast scales it around mid-grey, saturation scales
+its colour, sharpness sharpens or softens it, gain and (manual) exposure brighten it, a manual
+white balance tints it (lower temperatures bluer), a manual focus away from 0 blurs it.
+
 Faults for tests, as constructor options or in a ``video_device`` string (`open_synthetic`):
 ``fail_open`` (never opens), ``stop_after`` (unplugged after N frames), ``unplugged_for``
 (reopening works again that many seconds after the unplug) and ``fail_every`` (every K-th read
-fails while the device stays open). Devices with the same name and options share one state, kept
-in this module: the frame index and an unplug carry over to the next camera opened with them.
+fails while the device stays open); ``formats`` restricts what the camera offers
+(``synthetic?formats=yuyv``, ``mjpeg`` or ``yuyv,mjpeg``). Devices with the same name and
+options share one state, kept in this module: the frame index and an unplug carry over to the
+next camera opened with them.
 """
 
+from dataclasses import dataclass
 import functools
 import math
+import re
 import threading
 import time
 from urllib.parse import parse_qsl
@@ -51,6 +73,12 @@ MAX_SIZE = 8192
 MIN_CODE_SIZE = (64, 48)
 MAX_FPS = 1000.0
 FOURCC_YUYV = float(cv2.VideoWriter_fourcc(*'YUYV'))
+FOURCC_MJPG = float(cv2.VideoWriter_fourcc(*'MJPG'))
+FORMATS = {'yuyv': FOURCC_YUYV, 'mjpeg': FOURCC_MJPG}
+# USB 2.0 high speed carries about 24 MB/s of isochronous video; UVC cameras offer these rates.
+BUS_BYTES_PER_S = 24e6
+UVC_RATES = (30.0, 25.0, 20.0, 15.0, 10.0, 5.0)
+JPEG_QUALITY = 90
 
 # Patched by the tests to run the pacing on a fake clock.
 _now = time.monotonic
@@ -82,7 +110,7 @@ _DATA_CELLS = [(r, c) for r in range(_CODE_ROWS) for c in range(_CODE_COLS)
 _BARS = [(191, 191, 191), (0, 191, 191), (191, 191, 0), (0, 191, 0), (191, 0, 191),
          (0, 0, 191), (191, 0, 0)]
 _BOX_PERIOD = 64
-_OPTIONS = 'fail_open, stop_after, unplugged_for, fail_every'
+_OPTIONS = 'fail_open, stop_after, unplugged_for, fail_every, formats'
 
 
 def _crc8(data):
@@ -241,6 +269,139 @@ def synthetic_yuyv(index, width, height):
 def synthetic_frame(index, width, height):
     """Return exactly the BGR image a SyntheticCamera of this size gives for frame `index`."""
     return yuyv_to_bgr(synthetic_yuyv(index, width, height))
+
+
+def yuyv_max_fps(width, height):
+    """Return the highest UVC rate at which YUYV frames of this size fit the USB 2.0 bus."""
+    for rate in UVC_RATES:
+        if width * height * 2 * rate <= BUS_BYTES_PER_S:
+            return rate
+    return UVC_RATES[-1]
+
+
+@dataclass(frozen=True)
+class Control:
+    """A camera control: its OpenCV property, V4L2-like range and the camera's default."""
+
+    prop: int
+    minimum: int
+    maximum: int
+    default: int
+
+
+# V4L2 exposes auto exposure as a menu (1 manual, 3 aperture priority, i.e. automatic) and the
+# automatic switches as 0/1, which is what OpenCV's V4L2 backend passes through.
+CONTROLS = {
+    'brightness': Control(cv2.CAP_PROP_BRIGHTNESS, -64, 64, 0),
+    'contrast': Control(cv2.CAP_PROP_CONTRAST, 0, 64, 32),
+    'saturation': Control(cv2.CAP_PROP_SATURATION, 0, 128, 64),
+    'sharpness': Control(cv2.CAP_PROP_SHARPNESS, 0, 6, 3),
+    'gain': Control(cv2.CAP_PROP_GAIN, 0, 100, 0),
+    'auto_white_balance': Control(cv2.CAP_PROP_AUTO_WB, 0, 1, 1),
+    'white_balance': Control(cv2.CAP_PROP_WB_TEMPERATURE, 2800, 6500, 4600),
+    'auto_exposure': Control(cv2.CAP_PROP_AUTO_EXPOSURE, 1, 3, 3),
+    'exposure': Control(cv2.CAP_PROP_EXPOSURE, 3, 2047, 166),
+    'autofocus': Control(cv2.CAP_PROP_AUTOFOCUS, 0, 1, 1),
+    'focus': Control(cv2.CAP_PROP_FOCUS, 0, 250, 0),
+}
+_CONTROL_BY_PROP = {control.prop: name for name, control in CONTROLS.items()}
+_DEFAULT_CONTROLS = {name: control.default for name, control in CONTROLS.items()}
+
+
+def apply_controls(yuyv, values):
+    """
+    Return the YUYV buffer as the camera's controls make it look (the same array at defaults).
+
+    Luma is offset by brightness, scaled around mid-grey by contrast and brightened by gain
+    and, with auto exposure off, by exposure; chroma is scaled by saturation and, with auto
+    white balance off, shifted by the white balance (lower temperatures bluer); sharpness away
+    from 3 sharpens or softens and, with autofocus off, a focus away from 0 blurs.
+    """
+    if values == _DEFAULT_CONTROLS:
+        return yuyv
+    v = values
+    luma = yuyv[:, :, 0].astype(np.float32)
+    chroma = yuyv[:, :, 1].astype(np.float32)
+    gain = 1.0 + v['gain'] / 100.0
+    if v['auto_exposure'] == 1:
+        gain *= v['exposure'] / float(CONTROLS['exposure'].default)
+    luma = (luma - 128.0) * (v['contrast'] / 32.0) + 128.0 + v['brightness']
+    luma = (luma - 16.0) * gain + 16.0
+    blur = v['focus'] / 25.0 if v['autofocus'] == 0 else 0.0
+    if blur > 0:
+        luma = cv2.GaussianBlur(luma, (0, 0), blur)
+    if v['sharpness'] != 3:
+        soft = cv2.GaussianBlur(luma, (0, 0), 1.5)
+        luma = luma + (luma - soft) * ((v['sharpness'] - 3) / 3.0)
+    chroma = (chroma - 128.0) * (v['saturation'] / 64.0) + 128.0
+    if v['auto_white_balance'] == 0:
+        shift = (CONTROLS['white_balance'].default - v['white_balance']) / 50.0
+        chroma[:, 0::2] += shift   # U: bluer below the default temperature
+        chroma[:, 1::2] -= shift   # V: less red
+    out = np.empty_like(yuyv)
+    out[:, :, 0] = np.clip(np.rint(luma), 0, 255)
+    out[:, :, 1] = np.clip(np.rint(chroma), 0, 255)
+    return out
+
+
+_RESTART = re.compile(rb'\xff[\xd0-\xd7]')
+
+
+def _jpeg_rows(jpeg):
+    """Split a JPEG with a restart marker after every MCU row into (header, rows)."""
+    sos = jpeg.index(b'\xff\xda')
+    header_end = sos + 2 + int.from_bytes(jpeg[sos + 2:sos + 4], 'big')
+    return jpeg[:header_end], _RESTART.split(jpeg[header_end:-2])
+
+
+class _MjpegEncoder:
+    """
+    JPEG frames of one size as a camera's hardware encoder gives them, at little CPU cost.
+
+    The rows above the code strip repeat every _BOX_PERIOD frames: they are encoded once per
+    position in that cycle; only the MCU rows from the strip down are encoded per frame.
+    """
+
+    MCU = 16  # 4:2:0 sampling, libjpeg's default for colour images
+
+    def __init__(self, width, height):
+        geo = _geometry(width, height)
+        self.split = (geo.strip_y // self.MCU) * self.MCU
+        self.params = [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY,
+                       cv2.IMWRITE_JPEG_RST_INTERVAL, (width + self.MCU - 1) // self.MCU]
+        self.scenes = {}
+
+    def encode(self, index, yuyv):
+        """Return the JPEG bytes of frame `index` whose YUYV buffer is `yuyv`."""
+        key = index % _BOX_PERIOD
+        if key not in self.scenes:
+            full = self._encode(yuyv_to_bgr(yuyv))
+            header, rows = _jpeg_rows(full)
+            self.scenes[key] = (header, rows[:self.split // self.MCU])
+            return full
+        header, top = self.scenes[key]
+        rows = top + _jpeg_rows(self._encode(yuyv_to_bgr(yuyv[self.split:])))[1]
+        out = bytearray(header)
+        for number, row in enumerate(rows):
+            out += row
+            out += b'\xff%c' % (0xD0 + number % 8) if number < len(rows) - 1 else b'\xff\xd9'
+        return bytes(out)
+
+    def _encode(self, bgr):
+        ok, buffer = cv2.imencode('.jpg', bgr, self.params)
+        if not ok:
+            raise ValueError('JPEG encoding failed for a %s frame' % (bgr.shape,))
+        return buffer.tobytes()
+
+
+@functools.lru_cache(maxsize=4)
+def _mjpeg_encoder(width, height):
+    return _MjpegEncoder(width, height)
+
+
+def synthetic_jpeg(index, width, height):
+    """Return exactly the JPEG bytes a SyntheticCamera of this size gives in MJPEG mode."""
+    return _mjpeg_encoder(width, height).encode(index, synthetic_yuyv(index, width, height))
 
 
 def _luma(image):
@@ -425,11 +586,13 @@ class SyntheticCamera:
     `last_index` is the frame index of the image the last successful read() returned and
     `last_capture_time` the time.monotonic() at which it was captured (its due time; earlier
     than the read's return when the caller was late). `error` says why the device is not
-    open, or why its reads fail, or is None.
+    open, or why its reads fail, or is None. `formats` names the pixel formats it offers
+    (keys of FORMATS); it opens in YUYV where it offers it, as OpenCV's V4L2 backend does.
     """
 
     def __init__(self, width=640, height=480, fps=10.0, *, fail_open=False, stop_after=None,
-                 unplugged_for=None, fail_every=None, name='synthetic'):
+                 unplugged_for=None, fail_every=None, formats=('yuyv', 'mjpeg'),
+                 name='synthetic'):
         w, h, rate = _check_size(width), _check_size(height), _check_fps(fps)
         if w is None or h is None:
             raise ValueError('image size must be 1..%d pixels each way, got %r x %r'
@@ -443,12 +606,21 @@ class SyntheticCamera:
                              % (unplugged_for,))
         if fail_every is not None and (int(fail_every) != fail_every or fail_every < 1):
             raise ValueError('fail_every must be an integer >= 1, got %r' % (fail_every,))
+        unknown = [f for f in formats if f not in FORMATS]
+        if unknown or not formats:
+            raise ValueError('formats must be one or more of %s, got %s'
+                             % (', '.join(FORMATS), ','.join(formats) or 'none'))
         self.name = name
         self.last_index = None
         self.last_capture_time = None
         self.error = None
         self._width, self._height = max(2, w & ~1), h
-        self._pacer = FramePacer(rate)
+        self._offered = [FORMATS[f] for f in FORMATS if f in formats]
+        self._fourcc = self._offered[0]
+        self._convert_rgb = True
+        self._controls = dict(_DEFAULT_CONTROLS)
+        self._requested_fps = rate
+        self._pacer = FramePacer(self._rate())
         self._stop_after = stop_after
         self._fail_every = fail_every
         self._frames = 0
@@ -457,7 +629,7 @@ class SyntheticCamera:
         self._grabbed = None
         self._buf = None
         self._rendered = None
-        self._state = _device_state((name, stop_after, unplugged_for, fail_every))
+        self._state = _device_state((name, stop_after, unplugged_for, fail_every, formats))
         self._opened = not fail_open
         if fail_open:
             self.error = 'the device does not open (fail_open)'
@@ -529,12 +701,30 @@ class SyntheticCamera:
         return state.last_index + max(1, missed)
 
     def retrieve(self, image=None, flag=0):
-        """Return the grabbed frame as BGR (a new array each call)."""
+        """
+        Return the grabbed frame (a new array each call).
+
+        A BGR image, or with CAP_PROP_CONVERT_RGB off the buffer as the camera sent it, as a
+        1-D uint8 array: the JPEG bytes in MJPEG mode, the packed YUYV bytes in YUYV mode.
+        """
         if self._grabbed is None or not self._opened:
             return False, None
         if self._rendered != self._grabbed:
             self._render(self._grabbed)
-        return True, yuyv_to_bgr(self._buf)
+        yuyv = apply_controls(self._buf, self._controls)
+        if self._fourcc == FOURCC_YUYV:
+            if self._convert_rgb:
+                return True, yuyv_to_bgr(yuyv)
+            return True, yuyv.reshape(-1).copy()
+        encoder = _mjpeg_encoder(self._width, self._height)
+        if yuyv is self._buf:
+            jpeg = encoder.encode(self._grabbed, yuyv)
+        else:  # controls changed the whole picture: no cached rows apply
+            jpeg = encoder._encode(yuyv_to_bgr(yuyv))
+        data = np.frombuffer(jpeg, np.uint8)
+        if self._convert_rgb:
+            return True, cv2.imdecode(data, cv2.IMREAD_COLOR)
+        return True, data.copy()
 
     def _render(self, index):
         layout = _layout(self._width, self._height)
@@ -550,12 +740,41 @@ class SyntheticCamera:
             return False, None
         return self.retrieve()
 
+    def _rate(self):
+        """Return the frame rate the camera gives: YUYV is limited by the bus, MJPEG is not."""
+        if self._fourcc == FOURCC_YUYV:
+            return min(self._requested_fps, yuyv_max_fps(self._width, self._height))
+        return self._requested_fps
+
+    def controls(self):
+        """Return the camera's controls: name -> Control (OpenCV property, range, default)."""
+        return dict(CONTROLS)
+
     def set(self, prop_id, value):  # noqa: A003 (OpenCV's name)
-        """Request width, height or fps like a V4L2 driver; other properties are refused."""
+        """
+        Set a property like a V4L2 driver; False for what the camera refuses.
+
+        Width and height (an odd width is rounded down), fps (YUYV is capped by the bus),
+        FOURCC (YUYV or MJPG where offered), CONVERT_RGB and the controls within their range.
+        """
         if not self._opened:
             return False
         prop_id = int(prop_id)
-        if prop_id in (cv2.CAP_PROP_FRAME_WIDTH, cv2.CAP_PROP_FRAME_HEIGHT):
+        if prop_id in _CONTROL_BY_PROP:
+            control = CONTROLS[_CONTROL_BY_PROP[prop_id]]
+            if not isinstance(value, (int, float, np.integer, np.floating)) or not (
+                    math.isfinite(value) and control.minimum <= value <= control.maximum):
+                return False
+            self._controls[_CONTROL_BY_PROP[prop_id]] = int(round(value))
+            return True
+        if prop_id == cv2.CAP_PROP_CONVERT_RGB:
+            self._convert_rgb = bool(value)
+            return True
+        if prop_id == cv2.CAP_PROP_FOURCC:
+            if value not in self._offered:
+                return False
+            changed, self._fourcc = value != self._fourcc, float(value)
+        elif prop_id in (cv2.CAP_PROP_FRAME_WIDTH, cv2.CAP_PROP_FRAME_HEIGHT):
             size = _check_size(value)
             if size is None:
                 return False
@@ -568,11 +787,12 @@ class SyntheticCamera:
             rate = _check_fps(value)
             if rate is None:
                 return False
-            changed = rate != self._pacer.fps
-            self._pacer.fps = rate
+            changed, self._requested_fps = rate != self._requested_fps, rate
         else:
             return False
-        if changed:
+        rate = self._rate()
+        if changed or rate != self._pacer.fps:
+            self._pacer.fps = rate
             self._pacer.restart()
             self._rendered = None
         return True
@@ -589,7 +809,11 @@ class SyntheticCamera:
         if prop_id == cv2.CAP_PROP_FPS:
             return float(self._pacer.fps)
         if prop_id == cv2.CAP_PROP_FOURCC:
-            return FOURCC_YUYV
+            return self._fourcc
+        if prop_id == cv2.CAP_PROP_CONVERT_RGB:
+            return 1.0 if self._convert_rgb else 0.0
+        if prop_id in _CONTROL_BY_PROP:
+            return float(self._controls[_CONTROL_BY_PROP[prop_id]])
         if prop_id == cv2.CAP_PROP_POS_FRAMES:
             if self._pacer.running:
                 return float(self._base + self._pacer.next)
@@ -636,6 +860,12 @@ def parse_synthetic_spec(spec):
             options[key] = _parse_number(key, value, int, 0 if key == 'stop_after' else 1)
         elif key == 'unplugged_for':
             options[key] = _parse_number(key, value, float, 0)
+        elif key == 'formats':
+            options[key] = tuple(f.strip().lower() for f in value.split(',') if f.strip())
+            unknown = [f for f in options[key] if f not in FORMATS]
+            if unknown or not options[key]:
+                raise ValueError('formats must be a comma-separated list of %s, got "%s"'
+                                 % (', '.join(FORMATS), value))
         else:
             raise ValueError('unknown option "%s"; use synthetic?key=value&key=value with keys: %s'
                              % (key, _OPTIONS))

@@ -13,92 +13,194 @@
 # limitations under the License.
 
 """
-usbcam_publisher: camera frames to sensor_msgs/Image (bgr8) on usb_camera/image.
+usbcam_publisher: a USB camera as sensor_msgs/Image, CompressedImage and CameraInfo.
 
-The ROS 2 port of the tutorial's publisher, made robust: frames are read on a capture thread
-(a camera paces itself, so there is no timer to drift against it), stamped with their capture
-time and published at once, so no frame ever waits behind a newer one. A camera that fails
-mid-stream is released and reopened with back-off, and publishing resumes when it is back.
+The ROS 2 port of the tutorial's publisher, grown into a driver. Frames are read on a capture
+thread (the camera paces itself), stamped with their capture time and published at once: raw
+bgr8 on usb_camera/image, JPEG on usb_camera/image/compressed (the camera's own JPEG untouched
+in MJPEG mode), each only while it has subscribers, and the CameraInfo of every frame on
+usb_camera/camera_info with exactly the image's header. A camera that fails mid-stream is
+released and reopened with back-off; publishing resumes when it is back and the controls the
+user set are applied again. The node is a thin adapter: the camera itself is camera.Camera.
 """
 
 import threading
 import time
 
-import cv2
+from py_vision.calibration import CameraInfoManager
+from py_vision.camera import Camera, CONTROL_NAMES, PIXEL_FORMATS, SourceError
 from py_vision.cv_bridge import CvBridge
-from py_vision.frame_source import open_capture, SourceError
 from py_vision.node_main import ConfigError, main_for
-from py_vision.params import Parameters
+from py_vision.params import Parameters, Spec
 from py_vision.qos import publisher_qos, RELIABILITY
+from py_vision.transport import ImagePublisher, sibling_topic
 import rclpy
 from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.time import Time
-from sensor_msgs.msg import Image
+from sensor_msgs.msg import CameraInfo
+from sensor_msgs.srv import SetCameraInfo
+from std_msgs.msg import Header
 
 # Consecutive failed reads after which the device counts as gone (one bad read is noise).
 LOST_AFTER_FAILED_READS = 5
 REOPEN_BACKOFF_S = (0.25, 0.5, 1.0, 2.0, 4.0)
 REOPEN_LOG_PERIOD_S = 5.0
+IMAGE_TOPIC = 'usb_camera/image'
+
+
+def _control(name, kind, description, value_range=None):
+    # Not set unless the user sets it: the camera keeps its own value. The range here is what
+    # any UVC camera could accept; the camera's own range is checked when the value is applied.
+    return Spec(name, kind, description + " (not set: the camera's own value)", value_range,
+                live=True)
+
+
+_CONTROL_SPECS = (
+    _control('brightness', int, 'camera brightness', (-255, 255)),
+    _control('contrast', int, 'camera contrast', (0, 255)),
+    _control('saturation', int, 'camera colour saturation', (0, 255)),
+    _control('sharpness', int, 'camera sharpness', (0, 255)),
+    _control('gain', int, 'camera gain', (0, 255)),
+    _control('auto_white_balance', bool, 'automatic white balance'),
+    _control('white_balance', int, 'white balance temperature in kelvin, with '
+             'auto_white_balance off', (1000, 10000)),
+    _control('autoexposure', bool, 'automatic exposure'),
+    _control('exposure', int, 'exposure time in 100 us units, with autoexposure off',
+             (1, 10000)),
+    _control('autofocus', bool, 'automatic focus'),
+    _control('focus', int, 'focus position, with autofocus off', (0, 1023)),
+)
 
 
 class USBImagePublisher(Node):
     NODE_NAME = 'usbcam_publisher'
+    SUMMARY = ('Publishes a USB camera (or a video file, or the built-in synthetic camera) as '
+               'sensor_msgs/Image on usb_camera/image, JPEG on usb_camera/image/compressed '
+               'and CameraInfo on usb_camera/camera_info.')
+    PARAMETERS = (
+        Spec('video_device', '/dev/video0',
+             'V4L2 device path, OpenCV camera index, video file, or "synthetic[?options]"',
+             check=bool, accepted='a device path, an index, a file or synthetic'),
+        Spec('image_width', 640, 'requested frame width in pixels', (1, 8192)),
+        Spec('image_height', 480, 'requested frame height in pixels', (1, 8192)),
+        Spec('framerate', 10.0, 'requested frames per second', (0.0, 1000.0),
+             check=lambda v: v > 0, accepted='a number > 0 and <= 1000'),
+        Spec('pixel_format', 'auto', 'what the camera sends over USB; auto reaches the '
+             'requested rate where the camera can', choices=PIXEL_FORMATS),
+        Spec('jpeg_quality', 80, 'JPEG quality of usb_camera/image/compressed when encoded '
+             "here (an MJPEG camera's own JPEG is published as it is)", (1, 100), live=True),
+        Spec('frame_id', 'usb_camera', 'header.frame_id of the images', check=bool,
+             accepted='a non-empty string', live=True),
+        Spec('camera_name', 'usb_camera', 'camera name for the calibration (${NAME})',
+             check=bool, accepted='a non-empty string'),
+        Spec('camera_info_url', '', 'calibration file: file:///path.yaml or '
+             'package://pkg/path.yaml; empty: ~/.ros/camera_info/${NAME}.yaml if it exists'),
+        Spec('reliability', 'reliable', 'publisher QoS reliability', choices=tuple(RELIABILITY)),
+        Spec('depth', 10, 'publisher QoS queue depth', (1, 1000)),
+    ) + _CONTROL_SPECS
+
+    # What close() finds when start-up was interrupted before these were made.
+    camera = None
+    _thread = None
+    frames_captured = raw_published = compressed_published = frames_decoded = 0
 
     def __init__(self):
         super().__init__(self.NODE_NAME)
+        self._log_name = self.get_logger().name
+        self._stop = threading.Event()
+        self._camera_lock = threading.Lock()
+        self.camera = None
+        self._controls = {}
         params = Parameters(self)
-        self.video_device = params.declare(
-            'video_device', '/dev/video0',
-            'V4L2 device path, OpenCV camera index, video file, or "synthetic[?options]"',
-            check=bool, accepted='a device path, an index, a file or synthetic')
-        self.width = params.declare(
-            'image_width', 640, 'requested frame width in pixels',
-            check=lambda v: 0 < v <= 8192, accepted='1..8192')
-        self.height = params.declare(
-            'image_height', 480, 'requested frame height in pixels',
-            check=lambda v: 0 < v <= 8192, accepted='1..8192')
-        self.framerate = params.declare(
-            'framerate', 10.0, 'frames per second',
-            check=lambda v: 0 < v <= 1000, accepted='a number > 0 and <= 1000')
-        self.frame_id = params.declare(
-            'frame_id', 'usb_camera', 'header.frame_id of the images (can be changed live)',
-            on_change=self._set_frame_id)
-        reliability = params.declare(
-            'reliability', 'reliable', 'publisher QoS reliability',
-            check=RELIABILITY.__contains__, accepted=' or '.join(RELIABILITY))
-        depth = params.declare(
-            'depth', 10, 'publisher QoS queue depth', check=lambda v: 0 < v <= 1000,
-            accepted='1..1000')
+        live = {'jpeg_quality': self._set_jpeg_quality, 'frame_id': self._set_frame_id}
+        live.update({name: self._control_setter(name) for name in CONTROL_NAMES})
+        values = {spec.name: params.declare(spec, live.get(spec.name))
+                  for spec in self.PARAMETERS}
+        self.video_device = values['video_device']
+        self.size = (values['image_width'], values['image_height'])
+        self.framerate = values['framerate']
+        self.pixel_format = values['pixel_format']
+        self.frame_id = values['frame_id']
+        self._controls = {name: values[name] for name in CONTROL_NAMES
+                          if values[name] is not None}
 
-        self.bridge_ = CvBridge()
-        self.publisher_ = self.create_publisher(
-            Image, 'usb_camera/image', publisher_qos(reliability, depth))
+        qos = publisher_qos(values['reliability'], values['depth'])
+        self.images = ImagePublisher(self, IMAGE_TOPIC, qos, CvBridge())
+        self.images.jpeg_quality = values['jpeg_quality']
+        self.info_publisher = self.create_publisher(
+            CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
+        self.calibration = CameraInfoManager(
+            values['camera_name'], values['camera_info_url'], self.get_logger())
+        self.calibration.load()
+        self.create_service(SetCameraInfo, sibling_topic(self, IMAGE_TOPIC, 'set_camera_info'),
+                            self._set_camera_info)
         try:
-            self.cap = self._open()
+            self.camera = self._open()
         except SourceError as error:
             raise ConfigError(str(error))
-        self.frames_published = 0
+        self._apply_controls(self.camera, at_start=True)
         self.failed = False
-        self._stop = threading.Event()
         self._thread = threading.Thread(target=self._capture_loop, name='capture', daemon=True)
         self._thread.start()
+
+    # --- parameters ------------------------------------------------------------------
 
     def _set_frame_id(self, frame_id):
         self.frame_id = frame_id
 
+    def _set_jpeg_quality(self, quality):
+        self.images.jpeg_quality = quality
+
+    def _control_setter(self, name):
+        def apply(value):
+            with self._camera_lock:
+                camera = self.camera
+                if camera is None:  # reconnecting: applied when the camera is back
+                    self._controls[name] = value
+                    return None
+                ok, got, message = camera.set_control(name, value)
+            if not ok:
+                return message
+            self._controls[name] = value
+            if message:
+                self.get_logger().info(message)
+            return None
+        return apply
+
+    def _apply_controls(self, camera, at_start=False):
+        """Set every control the user gave; one warning for each the camera does not take."""
+        for name, value in list(self._controls.items()):
+            ok, got, message = camera.set_control(name, value)
+            if not ok:
+                self.get_logger().warning("%s; left at the camera's own value" % message)
+                if at_start:
+                    del self._controls[name]
+            elif message:
+                self.get_logger().info(message)
+
+    # --- calibration -----------------------------------------------------------------
+
+    def _set_camera_info(self, request, response):
+        response.success, response.status_message = self.calibration.set_camera_info(
+            request.camera_info)
+        log = self.get_logger().info if response.success else self.get_logger().warning
+        log('set_camera_info: %s' % response.status_message)
+        return response
+
+    # --- capture ---------------------------------------------------------------------
+
     def _open(self):
-        cap = open_capture(self.video_device, self.width, self.height, self.framerate)
-        width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH))
-        height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
-        fps = cap.get(cv2.CAP_PROP_FPS)
+        camera = Camera.open(self.video_device, self.size[0], self.size[1], self.framerate,
+                             self.pixel_format)
         note = ''
-        if (width, height) != (self.width, self.height):
-            note = ' (requested %dx%d; publishing what the device gives)' % (
-                self.width, self.height)
-        self.get_logger().info('opened %s: %dx%d at %.4g fps%s, publishing on %s' % (
-            self.video_device, width, height, fps, note, self.publisher_.topic_name))
-        return cap
+        if (camera.width, camera.height) != self.size:
+            note = ' (requested %dx%d; publishing what the device gives)' % self.size
+        self.get_logger().info('opened %s: %s%s, publishing on %s' % (
+            self.video_device, camera.describe(), note, self.images.raw.topic_name))
+        for line in camera.notes:
+            self.get_logger().warning(line)
+        return camera
 
     def _capture_loop(self):
         """Read, stamp and publish frames until close(); the camera belongs to this thread."""
@@ -110,53 +212,67 @@ class USBImagePublisher(Node):
                 self.get_logger().error('capturing from %s failed: %s: %s' % (
                     self.video_device, type(error).__name__, error))
                 self.failed = True
-                rclpy.try_shutdown(context=self.context)
+                try:
+                    rclpy.try_shutdown(context=self.context)
+                except Exception:  # a signal shut it down at the same moment
+                    pass
             # else: Ctrl-C or SIGTERM shut rclpy down while a frame was being published.
         finally:
-            cap, self.cap = self.cap, None
-            if cap is not None:
-                cap.release()
+            with self._camera_lock:
+                camera, self.camera = self.camera, None
+            if camera is not None:
+                camera.release()
 
     def _capture(self):
         failed_reads = 0
         while not self._stop.is_set():
-            if self.cap is None:
-                self.cap = self._reopen()
+            camera = self.camera
+            if camera is None:
+                camera = self._reopen()
+                with self._camera_lock:
+                    self.camera = camera
+                    if camera is not None:
+                        self._apply_controls(camera)
                 continue
-            ok, frame = self.cap.read()
+            with self._camera_lock:
+                frame = camera.read()
             if self._stop.is_set():
                 return
-            if not ok or frame is None:
+            if frame is None:
                 failed_reads += 1
                 if failed_reads >= LOST_AFTER_FAILED_READS:
                     self.get_logger().warning(
                         'lost %s after %d failed reads; releasing it and reopening' % (
                             self.video_device, failed_reads))
-                    self.cap.release()
-                    self.cap = None
+                    with self._camera_lock:
+                        self.camera = None
+                    camera.release()
                     failed_reads = 0
                 continue
             failed_reads = 0
-            self._publish(frame, self._capture_stamp())
+            self._publish(camera, frame)
 
-    def _capture_stamp(self):
-        """Return the capture time of the frame just read, as a ROS time."""
+    def _capture_stamp(self, captured):
+        """Return the capture time (time.monotonic(), or None) of a frame as a ROS time."""
         now = self.get_clock().now()
-        captured = getattr(self.cap, 'last_capture_time', None)
         if captured is None:
-            # OpenCV's V4L2 backend gives the driver's buffer time (CLOCK_MONOTONIC) here.
-            captured = self.cap.get(cv2.CAP_PROP_POS_MSEC) / 1e3
+            return now  # no capture time: the read has just returned the frame
         age_s = time.monotonic() - captured
         if not 0 <= age_s < 1.0:
-            return now  # no usable capture time: the read has just returned the frame
+            return now
         return Time(nanoseconds=now.nanoseconds - int(age_s * 1e9), clock_type=now.clock_type)
 
-    def _publish(self, frame, stamp):
-        msg = self.bridge_.cv2_to_imgmsg(frame, encoding='bgr8')
-        msg.header.stamp = stamp.to_msg()
-        msg.header.frame_id = self.frame_id
-        self.publisher_.publish(msg)
-        self.frames_published += 1
+    def _publish(self, camera, frame):
+        header = Header(stamp=self._capture_stamp(frame.capture_time).to_msg(),
+                        frame_id=self.frame_id)
+        raw, compressed = self.images.publish(header, frame.bgr, frame.jpeg)
+        self.frames_decoded += frame.decoded
+        info = self.calibration.camera_info(camera.width, camera.height)
+        info.header = header
+        self.info_publisher.publish(info)
+        self.frames_captured += 1
+        self.raw_published += raw
+        self.compressed_published += compressed
 
     def _reopen(self):
         """Try to reopen the device with back-off until it is back or the node stops."""
@@ -168,7 +284,7 @@ class USBImagePublisher(Node):
                 return None
             attempt += 1
             try:
-                cap = self._open()
+                camera = self._open()
             except SourceError as error:
                 if time.monotonic() - last_log >= REOPEN_LOG_PERIOD_S:
                     last_log = time.monotonic()
@@ -176,25 +292,31 @@ class USBImagePublisher(Node):
                 continue
             self.get_logger().info('%s is back after %d attempt(s); publishing resumes' % (
                 self.video_device, attempt))
-            return cap
+            return camera
         return None
 
     def close(self):
         """Stop capturing; the capture thread releases the camera."""
-        thread = getattr(self, '_thread', None)
+        thread = self._thread
         if thread is None:  # start-up was interrupted before capturing began
+            if self.camera is not None:
+                self.camera.release()
             return
         self._stop.set()
-        interrupt = getattr(self.cap, 'interrupt', None)
-        if interrupt is not None:
-            interrupt()  # a synthetic camera or a file waiting for its next frame
+        camera = self.camera
+        if camera is not None:
+            camera.interrupt()  # a synthetic camera or a file waiting for its next frame
         thread.join(2.0)
         # rclpy may be shut down already (Ctrl-C): a logger that does not publish to /rosout.
-        logger = get_logger(self.NODE_NAME + '.camera')
+        logger = get_logger(self._log_name + '.camera')
         if thread.is_alive():
             logger.warning('%s is still busy; the system releases it at exit' % self.video_device)
         else:
-            logger.info('camera released after %d frames' % self.frames_published)
+            logger.info('camera released after %d frames (%d raw, %d compressed published; '
+                        '%d JPEG encoded, %d decoded)' % (
+                            self.frames_captured, self.raw_published,
+                            self.compressed_published, self.images.encoded,
+                            self.frames_decoded))
 
 
 main = main_for(USBImagePublisher)

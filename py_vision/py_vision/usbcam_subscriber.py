@@ -13,45 +13,59 @@
 # limitations under the License.
 
 """
-usbcam_subscriber: receive usb_camera/image, convert it with the bridge and show it.
+usbcam_subscriber: receive usb_camera/image (raw or compressed) and show it.
 
 The ROS 2 port of the tutorial's subscriber. It hears reliable and best-effort publishers,
 shows any encoding the bridge knows (in an OpenCV window or a browser), logs the received
-rate and latency, and survives malformed images with a rate-limited error.
+rate and latency, and survives malformed images with a rate-limited error. With
+``image_transport:=compressed`` it reads usb_camera/image/compressed instead, and the browser
+viewer forwards the JPEG bytes it receives without decoding them.
 """
 
+import cv2
+import numpy as np
 from py_vision.cv_bridge import CvBridge, CvBridgeError, cvtColorForDisplay
-from py_vision.display import declare_display_parameters, Display
+from py_vision.display import Display, DISPLAYS
 from py_vision.node_main import main_for
-from py_vision.params import Parameters
-from py_vision.qos import ImageSubscription
+from py_vision.params import Parameters, Spec, viewer_specs
 from py_vision.stats import StreamStats
-from py_vision.synthetic_camera import read_frame_index
+from py_vision.transport import jpeg_size, subscribe, TRANSPORTS
 from rclpy.node import Node
 from rclpy.time import Time
-from sensor_msgs.msg import Image
 
 DEPTH_ENCODINGS = ('16UC1', '16SC1')
+IMAGE_TOPIC = 'usb_camera/image'
 
 
 class VideoSubscriber(Node):
     NODE_NAME = 'usbcam_subscriber'
+    SUMMARY = ('Shows the frames of usb_camera/image (remap it to watch another topic) in an '
+               'OpenCV window or a browser, and logs their rate and latency.')
+    PARAMETERS = viewer_specs('auto', DISPLAYS) + (
+        Spec('stats_period', 5.0, 'seconds between statistics log lines', (0.0, 3600.0),
+             check=lambda v: v > 0, accepted='a number > 0 and <= 3600', live=True),
+        Spec('image_transport', 'raw', 'raw: sensor_msgs/Image on the topic; compressed: '
+             'sensor_msgs/CompressedImage on <topic>/compressed', choices=TRANSPORTS),
+    )
+
+    display = None  # what close() finds when start-up was interrupted before it was made
 
     def __init__(self):
         super().__init__(self.NODE_NAME)
         params = Parameters(self)
-        display, web_host, web_port = declare_display_parameters(params, 'auto')
-        self.stats_period = params.declare(
-            'stats_period', 5.0, 'seconds between statistics log lines',
-            check=lambda v: 0 < v <= 3600, accepted='a number > 0 and <= 3600',
-            on_change=self._set_stats_period)
-
+        values = {spec.name: params.declare(
+            spec, self._set_stats_period if spec.name == 'stats_period' else None)
+            for spec in self.PARAMETERS}
+        self.stats_period = values['stats_period']
         self.bridge_ = CvBridge()
         self.stats = StreamStats(window_s=self.stats_period)
         self._errors_reported = 0
         self._last_error = ''
-        self.display = Display(self.get_logger(), display, web_host, web_port, 'usb_camera/image')
-        self.subscription_ = ImageSubscription(self, Image, 'usb_camera/image', self.callback)
+        compressed = values['image_transport'] == 'compressed'
+        self.display = Display(self.get_logger(), values['display'], values['web_host'],
+                               values['web_port'], IMAGE_TOPIC)
+        self.subscription_ = subscribe(self, IMAGE_TOPIC, values['image_transport'],
+                                       self.on_compressed if compressed else self.callback)
         self._stats_timer = self.create_timer(self.stats_period, self.report_stats)
         self.display.attach(self, self.stats, self.subscription_.topic_name)
 
@@ -61,8 +75,12 @@ class VideoSubscriber(Node):
         self.destroy_timer(self._stats_timer)
         self._stats_timer = self.create_timer(period, self.report_stats)
 
+    def _latency(self, msg):
+        return (self.get_clock().now() - Time.from_msg(msg.header.stamp)).nanoseconds / 1e9
+
     def callback(self, msg):
-        latency = (self.get_clock().now() - Time.from_msg(msg.header.stamp)).nanoseconds / 1e9
+        """Show one sensor_msgs/Image."""
+        latency = self._latency(msg)
         try:
             image = self.bridge_.imgmsg_to_cv2(msg)
             shown = image if msg.encoding == 'bgr8' else None
@@ -73,17 +91,36 @@ class VideoSubscriber(Node):
                 shown = cvtColorForDisplay(image, msg.encoding, 'bgr8',
                                            do_dynamic_scaling=depth)
         except CvBridgeError as error:
-            self._bad_message(msg, error)
+            self._bad_message(msg.width, msg.height, '"%s" image' % msg.encoding, error)
             return
-        self.stats.add(latency, msg.width, msg.height, msg.encoding,
-                       read_frame_index(image) if msg.encoding == 'bgr8' else None)
+        self.stats.add(latency, msg.width, msg.height, msg.encoding)
         if shown is not None:
             self.display.show(shown)
 
-    def _bad_message(self, msg, error):
+    def on_compressed(self, msg):
+        """Show one sensor_msgs/CompressedImage, decoding it only where pixels are needed."""
+        latency = self._latency(msg)
+        data = np.frombuffer(msg.data, np.uint8)
+        size = jpeg_size(data)
+        is_jpeg = size is not None
+        image = None
+        if not is_jpeg or self.display.needs_pixels:
+            image = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
+            if image is None:
+                self._bad_message(0, 0, 'compressed image (format "%s", %d bytes)' % (
+                    msg.format, data.size), 'it does not decode as JPEG or PNG')
+                return
+            size = (image.shape[1], image.shape[0])
+        if self.display.active:
+            if is_jpeg:
+                self.display.show_jpeg(data, image)
+            else:
+                self.display.show(image)  # a PNG: the viewer encodes it
+        self.stats.add(latency, size[0], size[1], msg.format.split(';')[0] or 'jpeg')
+
+    def _bad_message(self, width, height, what, error):
         self.stats.add_error()
-        self._last_error = 'cannot show a %dx%d "%s" image: %s' % (
-            msg.width, msg.height, msg.encoding, error)
+        self._last_error = 'cannot show a %dx%d %s: %s' % (width, height, what, error)
         if self.stats.errors == 1:
             # The first one is reported at once; later ones in the periodic summary.
             self._errors_reported = 1
@@ -101,9 +138,9 @@ class VideoSubscriber(Node):
             if s['longest_gap_s'] > max(1.0, 5.0 / max(s['fps'], 1e-3)):
                 gap = ', gap of %.2f s' % s['longest_gap_s']
             self.get_logger().info(
-                'received %d frames (%.1f fps), latency p50 %.1f ms p99 %.1f ms, lost %d, '
+                'received %d frames (%.1f fps), latency p50 %.1f ms p99 %.1f ms, '
                 '%dx%d %s on %s%s' % (
-                    s['frames'], s['fps'], s['latency_ms_p50'], s['latency_ms_p99'], s['lost'],
+                    s['frames'], s['fps'], s['latency_ms_p50'], s['latency_ms_p99'],
                     s['width'], s['height'], s['encoding'], topic, gap))
         self.stats.reset_gap()
         new_errors = self.stats.errors - self._errors_reported
@@ -115,9 +152,8 @@ class VideoSubscriber(Node):
 
     def close(self):
         """Close the window or the browser viewer (releasing its port)."""
-        display = getattr(self, 'display', None)  # None when start-up was interrupted
-        if display is not None:
-            display.close()
+        if self.display is not None:
+            self.display.close()
 
 
 main = main_for(VideoSubscriber)

@@ -320,6 +320,15 @@ class WebViewer:
             self._frame_number += 1
             self._frame_lock.notify_all()
 
+    def submit_jpeg(self, jpeg):
+        """Make an already encoded JPEG (bytes) the newest frame; it is served as it is."""
+        if not isinstance(jpeg, bytes) or jpeg[:2] != b'\xff\xd8':
+            raise ValueError('submit_jpeg takes the bytes of a JPEG image')
+        with self._frame_lock:
+            self._frame = jpeg
+            self._frame_number += 1
+            self._frame_lock.notify_all()
+
     def set_stats(self, stats):
         """Set the JSON-able dict /stats and the page show (fps, latency, size, topic...)."""
         with self._lock:
@@ -402,7 +411,9 @@ class WebViewer:
                 number, frame = self._frame_number, self._frame
             if frame is None:
                 return 0, None
-            if number != self._jpeg_number:
+            if number != self._jpeg_number and isinstance(frame, bytes):
+                self._jpeg, self._jpeg_number = frame, number
+            elif number != self._jpeg_number:
                 ok, buffer = cv2.imencode('.jpg', frame, self._jpeg_params)
                 if not ok:
                     raise ValueError('JPEG encoding failed for a %s frame' % (frame.shape,))
