@@ -20,11 +20,21 @@ a red filled circle at (60, 60) with radius 30 when it is larger than 60x60, and
 cv_bridge_image with the header it came with. A message the bridge cannot convert is logged
 (at most once per ERROR_LOG_PERIOD_S) and skipped; the node keeps going. With `display` set,
 the processed frames are also shown, like the subscriber shows its own.
+
+The processing runs on a LatestFrameWorker, not in the subscription callback: a step slower
+than the camera (`simulated_work_ms` makes one) works on the newest frame and counts the ones
+it skips, instead of working through a backlog of old frames. docs/processing.md explains it.
 """
 
+import threading
+import time
+from typing import Callable, Optional
+
 import cv2
+import numpy as np
 from py_vision.cv_bridge import CvBridge, CvBridgeError
 from py_vision.display import declare_display_parameters, Display
+from py_vision.latest_frame import LatestFrameWorker
 from py_vision.node_main import main_for
 from py_vision.params import Parameters
 from py_vision.qos import ImageSubscription, publisher_qos
@@ -35,6 +45,52 @@ from sensor_msgs.msg import Image
 
 CIRCLE_CENTER, CIRCLE_RADIUS, CIRCLE_BGR = (60, 60), 30, (0, 0, 255)
 ERROR_LOG_PERIOD_S = 5.0
+STATS_PERIOD_S = 5.0
+MAX_SIMULATED_WORK_MS = 10000.0
+# One call of the simulated work: short enough to meet its end time and notice a shutdown
+# within a millisecond, long enough that the loop around it costs nothing.
+_WORK_CHUNK = np.ones(65536, np.float32)
+
+
+def simulated_work(seconds: float, cancelled: Callable[[], bool]) -> None:
+    """
+    Keep one core busy for `seconds` of wall-clock time, or until cancelled() is true.
+
+    numpy computes with the GIL released, as OpenCV and accelerator calls do, so the node's
+    other thread keeps taking messages meanwhile, as it would beside real vision code.
+    """
+    out = np.empty_like(_WORK_CHUNK)
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline and not cancelled():
+        np.sin(_WORK_CHUNK, out=out)
+
+
+class ProcessingStats:
+    """The output stream's statistics and the worker's, safe to use from both threads."""
+
+    def __init__(self, worker: LatestFrameWorker):
+        self.worker = worker
+        self._output = StreamStats(window_s=STATS_PERIOD_S)
+        self._lock = threading.Lock()
+
+    def add_output(self, age_s: float, width: int, height: int) -> int:
+        """Record one published frame and how old it was; return the number published."""
+        self.worker.record_age(age_s)
+        with self._lock:
+            self._output.add(age_s, width, height, 'bgr8')
+            return self._output.frames
+
+    def add_error(self) -> int:
+        """Record one frame that could not be converted; return how many so far."""
+        with self._lock:
+            self._output.add_error()
+            return self._output.errors
+
+    def snapshot(self) -> dict:
+        """Return the output's rate, latency and size, with the worker's counts and times."""
+        with self._lock:
+            output = self._output.snapshot()
+        return dict(output, **self.worker.snapshot())
 
 
 class CvBridgeTest(Node):
@@ -44,43 +100,100 @@ class CvBridgeTest(Node):
         super().__init__(self.NODE_NAME)
         params = Parameters(self)
         display, web_host, web_port = declare_display_parameters(params, 'none')
+        self.simulated_work_s = params.declare(
+            'simulated_work_ms', 0.0,
+            'busy processing time added to every frame, to try the pipeline with a slow step',
+            check=lambda v: 0 <= v <= MAX_SIMULATED_WORK_MS, accepted='0..10000 (milliseconds)',
+            on_change=self._set_simulated_work) / 1e3
 
         self.bridge_ = CvBridge()
-        self.stats = StreamStats(window_s=5.0)
         self.display = Display(self.get_logger(), display, web_host, web_port, 'cv_bridge_image')
         # Reliable with a queue of 10, the ROS 2 default: what the seed's rospy publisher
         # gives, and both reliable and best-effort subscribers (rqt_image_view) receive it.
         self.publisher_ = self.create_publisher(Image, 'cv_bridge_image', publisher_qos())
-        self.subscription_ = ImageSubscription(self, Image, 'usb_camera/image', self.callback)
+        # Frames can wait in three places: the subscription's DDS history, the executor
+        # (which takes one message per callback) and the worker's slot. The callback only
+        # offers, so the executor never falls behind; keep-last 1 means that even when it is
+        # held up, DDS keeps only the newest frame for it; the slot holds one frame.
+        self.worker = LatestFrameWorker(self.process, on_error=self._step_failed,
+                                        window_s=STATS_PERIOD_S, name='processing')
+        self.stats = ProcessingStats(self.worker)
+        self.subscription_ = ImageSubscription(self, Image, 'usb_camera/image', self.worker.offer,
+                                               depth=1)
+        self._shown_lock = threading.Lock()
+        self._to_show: Optional[np.ndarray] = None
+        # OpenCV windows belong to the executor's thread: the worker hands frames over.
+        self._show_request = self.create_guard_condition(self._show_newest)
+        self.create_timer(STATS_PERIOD_S, self.report_stats)
         self.display.attach(self, self.stats, self.publisher_.topic_name)
-        self.get_logger().info('drawing on images from %s, publishing them on %s' % (
-            self.subscription_.topic_name, self.publisher_.topic_name))
+        self.get_logger().info('drawing on images from %s, publishing them on %s%s' % (
+            self.subscription_.topic_name, self.publisher_.topic_name,
+            self._work_note(self.simulated_work_s)))
 
-    def callback(self, msg):
+    @staticmethod
+    def _work_note(seconds):
+        return ', simulated work %g ms a frame' % (seconds * 1e3) if seconds else ''
+
+    def _set_simulated_work(self, milliseconds):
+        self.simulated_work_s = milliseconds / 1e3
+        self.get_logger().info('simulated work is now %g ms a frame' % milliseconds)
+
+    def process(self, msg):
+        """Convert, draw and publish one frame (on the worker's thread)."""
         try:
             image = self.bridge_.imgmsg_to_cv2(msg, 'bgr8')
         except CvBridgeError as error:
-            self.stats.add_error()
+            errors = self.stats.add_error()
             self.get_logger().error(
                 'cannot convert a %dx%d "%s" image to bgr8, skipped: %s (%d skipped so far)' % (
-                    msg.width, msg.height, msg.encoding, error, self.stats.errors),
+                    msg.width, msg.height, msg.encoding, error, errors),
                 throttle_duration_sec=ERROR_LOG_PERIOD_S)
             return
+        if self.simulated_work_s > 0:
+            simulated_work(self.simulated_work_s, lambda: self.worker.closed)
         # The bridge returns a writable image the node owns (a view of this message's data,
         # or a converted copy), so the circle is drawn in place.
         rows, cols = image.shape[:2]
         if cols > 60 and rows > 60:
             cv2.circle(image, CIRCLE_CENTER, CIRCLE_RADIUS, CIRCLE_BGR, -1)
         self.publisher_.publish(self.bridge_.cv2_to_imgmsg(image, 'bgr8', header=msg.header))
-        if self.stats.frames == 0:
+        age = (self.get_clock().now() - Time.from_msg(msg.header.stamp)).nanoseconds / 1e9
+        if self.stats.add_output(age, cols, rows) == 1:
             self.get_logger().info('first image: %dx%d %s' % (cols, rows, msg.encoding))
-        latency = self.get_clock().now() - Time.from_msg(msg.header.stamp)
-        self.stats.add(latency.nanoseconds / 1e9, cols, rows, 'bgr8')
-        self.display.show(image)
+        if self.display.active:
+            with self._shown_lock:
+                self._to_show = image
+            self._show_request.trigger()
+
+    def _show_newest(self):
+        with self._shown_lock:
+            image, self._to_show = self._to_show, None
+        if image is not None:
+            self.display.show(image)
+
+    def _step_failed(self, error):
+        self.get_logger().error('processing a frame failed: %s: %s' % (
+            type(error).__name__, error), throttle_duration_sec=ERROR_LOG_PERIOD_S)
+
+    def report_stats(self):
+        """Log one line: frames in, processed, skipped, processing time and output age."""
+        s = self.stats.snapshot()
+        line = 'frames in %d, processed %d, skipped %d' % (
+            s['frames_in'], s['processed'], s['skipped'])
+        if s['processing_ms_p50'] is not None:
+            line += ', processing p50 %.1f ms p99 %.1f ms' % (
+                s['processing_ms_p50'], s['processing_ms_p99'])
+        if s['age_ms_p50'] is not None:
+            line += ', output age p50 %.1f ms p99 %.1f ms, %.1f fps out' % (
+                s['age_ms_p50'], s['age_ms_p99'], s['fps'])
+        self.get_logger().info('%s on %s' % (line, self.publisher_.topic_name))
 
     def close(self):
-        """Close the window or the browser viewer (releasing its port)."""
-        display = getattr(self, 'display', None)  # None when start-up was interrupted
+        """Stop the worker (abandoning a step in progress), then the window or viewer."""
+        worker = getattr(self, 'worker', None)  # None when start-up was interrupted
+        if worker is not None:
+            worker.close()
+        display = getattr(self, 'display', None)
         if display is not None:
             display.close()
 

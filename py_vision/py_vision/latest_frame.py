@@ -1,0 +1,174 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Newest-frame processing: a step slower than its input works on the newest item, not a backlog.
+
+A subscription callback calls `LatestFrameWorker.offer(msg)`, which only puts the message in
+a one-item slot (an item still waiting there is replaced and counted as skipped) and wakes the
+worker thread. That thread runs the processing step on whatever is in the slot whenever it is
+ready for the next one. With a step faster than its input every item is processed, in order;
+with a slower one each result describes the newest input, and the delay does not grow.
+
+No ROS here: the node supplies the step and reports how old each of its outputs is.
+"""
+
+import collections
+import sys
+import threading
+import time
+import traceback
+from typing import Callable, Deque, Dict, Generic, Optional, Tuple, TypeVar
+
+from py_vision.stats import percentile
+
+T = TypeVar('T')
+
+_EMPTY = object()  # the slot's "nothing waiting" (None is a valid item)
+
+
+def print_error(error: Exception) -> None:
+    """Report an exception the processing step raised on stderr, with its traceback."""
+    traceback.print_exception(type(error), error, error.__traceback__, file=sys.stderr)
+
+
+class _RecentValues:
+    """Values of the last window_s seconds, for percentiles that follow what happens now."""
+
+    def __init__(self, window_s: float, clock: Callable[[], float]):
+        self.window_s = window_s
+        self._clock = clock
+        self._values: Deque[Tuple[float, float]] = collections.deque()
+
+    def add(self, value: float) -> None:
+        self._values.append((self._clock(), value))
+
+    def percentiles_ms(self) -> Tuple[Optional[float], Optional[float]]:
+        """Return (p50, p99) in milliseconds, or (None, None) when the window is empty."""
+        horizon = self._clock() - self.window_s
+        while self._values and self._values[0][0] < horizon:
+            self._values.popleft()
+        values = sorted(value for _, value in self._values)
+        if not values:
+            return None, None
+        return (round(percentile(values, 0.5) * 1e3, 2),
+                round(percentile(values, 0.99) * 1e3, 2))
+
+
+class LatestFrameWorker(Generic[T]):
+    """
+    Runs process(item) on its own thread, always on the newest item offered.
+
+    Counts since start: items offered (`frames_in`), steps run (`processed`) and items
+    replaced before a step took them (`skipped`); frames_in = processed + skipped + the one
+    waiting or in progress. Over the last window_s seconds: how long a step took and how old
+    the outputs were (`record_age()`), p50 and p99.
+
+    A step that raises is reported through on_error (default: a traceback on stderr) and
+    the worker goes on with the next item.
+    """
+
+    def __init__(self, process: Callable[[T], None], *,
+                 on_error: Callable[[Exception], None] = print_error,
+                 window_s: float = 5.0, name: str = 'latest_frame',
+                 clock: Callable[[], float] = time.monotonic):
+        self._process = process
+        self._on_error = on_error
+        self._clock = clock
+        self._cond = threading.Condition()
+        self._waiting = _EMPTY
+        self._closed = threading.Event()
+        self.frames_in = 0
+        self.processed = 0
+        self.skipped = 0
+        self._processing_s = _RecentValues(window_s, clock)
+        self._age_s = _RecentValues(window_s, clock)
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
+
+    @property
+    def closed(self) -> bool:
+        """Return True once close() was called: a long step may poll this to give up early."""
+        return self._closed.is_set()
+
+    def offer(self, item: T) -> None:
+        """Make item the next one to process (O(1), never waits for the step)."""
+        with self._cond:
+            if self._closed.is_set():
+                return
+            self.frames_in += 1
+            if self._waiting is not _EMPTY:
+                self.skipped += 1
+            self._waiting = item
+            self._cond.notify()
+
+    def record_age(self, age_s: float) -> None:
+        """Record how old an output was when it went out: now minus its input's capture time."""
+        with self._cond:
+            self._age_s.add(age_s)
+
+    def snapshot(self) -> Dict[str, Optional[float]]:
+        """Return the counts since start and the recent percentiles, JSON-able."""
+        with self._cond:
+            processing = self._processing_s.percentiles_ms()
+            age = self._age_s.percentiles_ms()
+            return {
+                'frames_in': self.frames_in,
+                'processed': self.processed,
+                'skipped': self.skipped,
+                'processing_ms_p50': processing[0],
+                'processing_ms_p99': processing[1],
+                'age_ms_p50': age[0],
+                'age_ms_p99': age[1],
+            }
+
+    def close(self, timeout: float = 1.0) -> bool:
+        """
+        Stop taking items and end the thread; return True if it ended within timeout seconds.
+
+        An item still waiting is dropped (counted as skipped). The step in progress is
+        abandoned: an error it raises from now on is not reported, and a step that polls
+        `closed` ends early. One that does not poll it finishes on the (daemon) thread, which
+        ends with the process if it outlasts timeout.
+        """
+        with self._cond:
+            self._closed.set()
+            if self._waiting is not _EMPTY:
+                self.skipped += 1
+                self._waiting = _EMPTY
+            self._cond.notify()
+        if self._thread is not threading.current_thread():
+            self._thread.join(timeout)
+        return not self._thread.is_alive()
+
+    def _run(self) -> None:
+        while True:
+            with self._cond:
+                while self._waiting is _EMPTY and not self._closed.is_set():
+                    self._cond.wait()
+                if self._closed.is_set():
+                    return
+                item, self._waiting = self._waiting, _EMPTY
+            start = self._clock()
+            try:
+                self._process(item)
+            except Exception as error:
+                # After close() the node tears down what the step uses: its failure is expected.
+                if not self._closed.is_set():
+                    self._on_error(error)
+            took = self._clock() - start
+            del item  # a frame is large: do not hold it while waiting for the next one
+            with self._cond:
+                self.processed += 1
+                self._processing_s.add(took)
