@@ -15,9 +15,11 @@
 """
 cv_bridge_test: the processing step of the second tutorial, ported to ROS 2.
 
-Every image from usb_camera/image is converted to an OpenCV bgr8 image with the bridge, gets
+Every image from usb_camera/image (or usb_camera/image/compressed with
+``image_transport:=compressed``) is converted to an OpenCV bgr8 image with the bridge, gets
 a red filled circle at (60, 60) with radius 30 when it is larger than 60x60, and goes out on
-cv_bridge_image with the header it came with. A message the bridge cannot convert is logged
+cv_bridge_image with the header it came with (and, while it has subscribers, as JPEG on
+cv_bridge_image/compressed). A message the bridge cannot convert is logged
 (at most once per ERROR_LOG_PERIOD_S) and skipped; the node keeps going. With `display` set,
 the processed frames are also shown, like the subscriber shows its own.
 
@@ -33,15 +35,16 @@ from typing import Callable, Optional
 import cv2
 import numpy as np
 from py_vision.cv_bridge import CvBridge, CvBridgeError
-from py_vision.display import declare_display_parameters, Display
+from py_vision.display import Display, DISPLAYS
 from py_vision.latest_frame import LatestFrameWorker
 from py_vision.node_main import main_for
-from py_vision.params import Parameters
-from py_vision.qos import ImageSubscription, publisher_qos
+from py_vision.params import Parameters, Spec, viewer_specs
+from py_vision.qos import publisher_qos
 from py_vision.stats import StreamStats
+from py_vision.transport import ImagePublisher, subscribe, TRANSPORTS
 from rclpy.node import Node
 from rclpy.time import Time
-from sensor_msgs.msg import Image
+from sensor_msgs.msg import CompressedImage
 
 CIRCLE_CENTER, CIRCLE_RADIUS, CIRCLE_BGR = (60, 60), 30, (0, 0, 255)
 ERROR_LOG_PERIOD_S = 5.0
@@ -95,22 +98,33 @@ class ProcessingStats:
 
 class CvBridgeTest(Node):
     NODE_NAME = 'cv_bridge_test'
+    SUMMARY = ('Draws a red circle on every frame of usb_camera/image and publishes it on '
+               'cv_bridge_image, always working on the newest frame.')
+    PARAMETERS = viewer_specs('none', DISPLAYS) + (
+        Spec('image_transport', 'raw', 'raw: sensor_msgs/Image on usb_camera/image; '
+             'compressed: sensor_msgs/CompressedImage on usb_camera/image/compressed',
+             choices=TRANSPORTS),
+        Spec('simulated_work_ms', 0.0, 'busy processing time added to every frame, to try '
+             'the pipeline with a slow step', (0.0, MAX_SIMULATED_WORK_MS), live=True),
+    )
+
+    worker = display = None  # what close() finds when start-up was interrupted
 
     def __init__(self):
         super().__init__(self.NODE_NAME)
         params = Parameters(self)
-        display, web_host, web_port = declare_display_parameters(params, 'none')
-        self.simulated_work_s = params.declare(
-            'simulated_work_ms', 0.0,
-            'busy processing time added to every frame, to try the pipeline with a slow step',
-            check=lambda v: 0 <= v <= MAX_SIMULATED_WORK_MS, accepted='0..10000 (milliseconds)',
-            on_change=self._set_simulated_work) / 1e3
+        values = {spec.name: params.declare(
+            spec, self._set_simulated_work if spec.name == 'simulated_work_ms' else None)
+            for spec in self.PARAMETERS}
+        self.simulated_work_s = values['simulated_work_ms'] / 1e3
 
         self.bridge_ = CvBridge()
-        self.display = Display(self.get_logger(), display, web_host, web_port, 'cv_bridge_image')
+        self.display = Display(self.get_logger(), values['display'], values['web_host'],
+                               values['web_port'], 'cv_bridge_image')
         # Reliable with a queue of 10, the ROS 2 default: what the seed's rospy publisher
         # gives, and both reliable and best-effort subscribers (rqt_image_view) receive it.
-        self.publisher_ = self.create_publisher(Image, 'cv_bridge_image', publisher_qos())
+        self.images = ImagePublisher(self, 'cv_bridge_image', publisher_qos(), self.bridge_)
+        self.publisher_ = self.images.raw
         # Frames can wait in three places: the subscription's DDS history, the executor
         # (which takes one message per callback) and the worker's slot. The callback only
         # offers, so the executor never falls behind; keep-last 1 means that even when it is
@@ -118,8 +132,8 @@ class CvBridgeTest(Node):
         self.worker = LatestFrameWorker(self.process, on_error=self._step_failed,
                                         window_s=STATS_PERIOD_S, name='processing')
         self.stats = ProcessingStats(self.worker)
-        self.subscription_ = ImageSubscription(self, Image, 'usb_camera/image', self.worker.offer,
-                                               depth=1)
+        self.subscription_ = subscribe(self, 'usb_camera/image', values['image_transport'],
+                                       self.worker.offer, depth=1)
         self._shown_lock = threading.Lock()
         self._to_show: Optional[np.ndarray] = None
         # OpenCV windows belong to the executor's thread: the worker hands frames over.
@@ -141,13 +155,17 @@ class CvBridgeTest(Node):
     def process(self, msg):
         """Convert, draw and publish one frame (on the worker's thread)."""
         try:
-            image = self.bridge_.imgmsg_to_cv2(msg, 'bgr8')
+            if isinstance(msg, CompressedImage):
+                what = 'compressed image (format "%s")' % msg.format
+                image = self.bridge_.compressed_imgmsg_to_cv2(msg, 'bgr8')
+            else:
+                what = '%dx%d "%s" image' % (msg.width, msg.height, msg.encoding)
+                image = self.bridge_.imgmsg_to_cv2(msg, 'bgr8')
         except CvBridgeError as error:
             errors = self.stats.add_error()
             self.get_logger().error(
-                'cannot convert a %dx%d "%s" image to bgr8, skipped: %s (%d skipped so far)' % (
-                    msg.width, msg.height, msg.encoding, error, errors),
-                throttle_duration_sec=ERROR_LOG_PERIOD_S)
+                'cannot convert a %s to bgr8, skipped: %s (%d skipped so far)' % (
+                    what, error, errors), throttle_duration_sec=ERROR_LOG_PERIOD_S)
             return
         if self.simulated_work_s > 0:
             simulated_work(self.simulated_work_s, lambda: self.worker.closed)
@@ -156,10 +174,11 @@ class CvBridgeTest(Node):
         rows, cols = image.shape[:2]
         if cols > 60 and rows > 60:
             cv2.circle(image, CIRCLE_CENTER, CIRCLE_RADIUS, CIRCLE_BGR, -1)
-        self.publisher_.publish(self.bridge_.cv2_to_imgmsg(image, 'bgr8', header=msg.header))
+        self.images.publish(msg.header, lambda: image)
         age = (self.get_clock().now() - Time.from_msg(msg.header.stamp)).nanoseconds / 1e9
         if self.stats.add_output(age, cols, rows) == 1:
-            self.get_logger().info('first image: %dx%d %s' % (cols, rows, msg.encoding))
+            self.get_logger().info('first image: %dx%d %s' % (
+                cols, rows, 'jpeg' if isinstance(msg, CompressedImage) else msg.encoding))
         if self.display.active:
             with self._shown_lock:
                 self._to_show = image
@@ -190,12 +209,10 @@ class CvBridgeTest(Node):
 
     def close(self):
         """Stop the worker (abandoning a step in progress), then the window or viewer."""
-        worker = getattr(self, 'worker', None)  # None when start-up was interrupted
-        if worker is not None:
-            worker.close()
-        display = getattr(self, 'display', None)
-        if display is not None:
-            display.close()
+        if self.worker is not None:
+            self.worker.close()
+        if self.display is not None:
+            self.display.close()
 
 
 main = main_for(CvBridgeTest)

@@ -126,7 +126,8 @@ class ImagePublisher:
         return raw_done, compressed_done
 
 
-def subscribe(node, base_topic: str, transport: str, callback) -> ImageSubscription:
+def subscribe(node, base_topic: str, transport: str, callback,
+              depth: int = 10) -> ImageSubscription:
     """
     Subscribe to base_topic's frames as `transport` says: raw Images or CompressedImages.
 
@@ -134,5 +135,5 @@ def subscribe(node, base_topic: str, transport: str, callback) -> ImageSubscript
     """
     if transport == 'compressed':
         return ImageSubscription(node, CompressedImage, compressed_topic(node, base_topic),
-                                 callback)
-    return ImageSubscription(node, Image, base_topic, callback)
+                                 callback, depth=depth)
+    return ImageSubscription(node, Image, base_topic, callback, depth=depth)
