@@ -154,10 +154,12 @@ class _Document:
         try:
             self.root = yaml.compose(text, Loader=yaml.SafeLoader)
         except yaml.MarkedYAMLError as error:
-            mark = error.problem_mark or error.context_mark
-            where = ' line %d' % (mark.line + 1) if mark else ''
-            raise CalibrationError('%s%s: not valid YAML: %s' % (
-                source, where, error.problem or error.context)) from None
+            mark, context = error.problem_mark or error.context_mark, error.context_mark
+            message = '%s%s: not valid YAML: %s' % (
+                source, ' line %d' % (mark.line + 1) if mark else '', error.problem)
+            if context is not None and context.line != mark.line:
+                message += ' (%s from line %d)' % (error.context, context.line + 1)
+            raise CalibrationError(message) from None
         except yaml.YAMLError as error:
             raise CalibrationError('%s: not valid YAML: %s' % (source, error)) from None
         if self.root is None:
