@@ -115,6 +115,8 @@ def resolve_url(url: str, camera_name: str) -> str:
 
     An empty URL means DEFAULT_URL. Raise CalibrationError if the URL cannot be used.
     """
+    url = url or DEFAULT_URL
+
     def substitute(match):
         variable = match.group(1)
         if variable == 'NAME':
@@ -125,7 +127,7 @@ def resolve_url(url: str, camera_name: str) -> str:
         raise CalibrationError('%s: unknown substitution ${%s} (only ${NAME} and ${ROS_HOME})'
                                % (url, variable))
 
-    resolved = _SUBSTITUTION.sub(substitute, url or DEFAULT_URL)
+    resolved = _SUBSTITUTION.sub(substitute, url)
     scheme, _, rest = resolved.partition('://')
     scheme = scheme.lower()
     if scheme == 'file' and rest.startswith('/'):
@@ -282,13 +284,12 @@ def dump_calibration(camera_name: str, info: CameraInfo) -> str:
         'image_width': int(info.width),
         'image_height': int(info.height),
         'camera_name': camera_name,
+        'camera_matrix': _matrix_yaml(info.k, 3, 3),
+        'distortion_model': info.distortion_model,
+        'distortion_coefficients': _matrix_yaml(info.d, 1, len(info.d)),
+        'rectification_matrix': _matrix_yaml(info.r, 3, 3),
+        'projection_matrix': _matrix_yaml(info.p, 3, 4),
     }
-    for key, field, rows, cols in _MATRICES[:1]:
-        document[key] = _matrix_yaml(getattr(info, field), rows, cols)
-    document['distortion_model'] = info.distortion_model
-    document['distortion_coefficients'] = _matrix_yaml(info.d, 1, len(info.d))
-    for key, field, rows, cols in _MATRICES[1:]:
-        document[key] = _matrix_yaml(getattr(info, field), rows, cols)
     if info.binning_x or info.binning_y:
         document['binning_x'] = int(info.binning_x)
         document['binning_y'] = int(info.binning_y)
