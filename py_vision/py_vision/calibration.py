@@ -97,10 +97,14 @@ class Logger(Protocol):
         """Log a warning line."""
 
 
-def check_camera_name(camera_name: str) -> None:
-    """Raise CalibrationError unless camera_name is as camera_info_manager accepts it."""
-    # The name becomes part of a file name through ${NAME}: letters, digits and '_' only.
-    if not _CAMERA_NAME.match(camera_name):
+def is_valid_camera_name(camera_name: str) -> bool:
+    """Whether camera_name is as camera_info_manager accepts it: letters, digits and _ only."""
+    # The name becomes part of a file name through ${NAME}, so no '/' or '..'.
+    return bool(_CAMERA_NAME.match(camera_name))
+
+
+def _check_camera_name(camera_name: str) -> None:
+    if not is_valid_camera_name(camera_name):
         raise CalibrationError(
             'camera name %r is not usable: it must be letters, digits and _ only' % camera_name)
 
@@ -120,7 +124,7 @@ def resolve_url(url: str, camera_name: str) -> str:
     def substitute(match):
         variable = match.group(1)
         if variable == 'NAME':
-            check_camera_name(camera_name)
+            _check_camera_name(camera_name)
             return camera_name
         if variable == 'ROS_HOME':
             return _ros_home()
@@ -365,7 +369,7 @@ class CameraInfoManager:
 
     def __init__(self, camera_name: str, url: str, logger: Logger):
         """Raise CalibrationError for a camera name camera_info_manager would not accept."""
-        check_camera_name(camera_name)
+        _check_camera_name(camera_name)
         self._camera_name = camera_name
         self._url = url
         self._logger = logger
@@ -455,12 +459,11 @@ class CameraInfoManager:
         """
         Validate info, store it in the URL's file and publish it from the next frame on.
 
-        Return (success, status message); on failure the message says why and nothing changed.
+        Return (success, status message) for the service response and the caller's log; on
+        failure the message says why and nothing changed.
         """
         with self._store_lock:
-            success, message = self._store(info)
-            (self._logger.info if success else self._logger.warning)(message)
-            return success, message
+            return self._store(info)
 
     def _store(self, info: CameraInfo) -> tuple[bool, str]:
         problem = validate_camera_info(info)

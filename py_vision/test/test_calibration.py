@@ -170,6 +170,9 @@ def test_unusable_url_says_why(url, says):
 
 
 def test_a_camera_name_cannot_leave_the_directory(logger):
+    assert calibration.is_valid_camera_name('front_Left_2')
+    assert not calibration.is_valid_camera_name('front-left')
+    assert not calibration.is_valid_camera_name('')
     with pytest.raises(CalibrationError, match='letters, digits and _'):
         resolve_url('file:///data/${NAME}.yaml', '../etc/passwd')
     with pytest.raises(CalibrationError, match='letters, digits and _'):
@@ -455,7 +458,6 @@ def test_set_camera_info_refuses_a_package_url(logger):
     assert not success
     assert status.startswith('calibration not stored: camera_info_url %s points into an '
                              'installed package, which a rebuild overwrites' % url)
-    assert logger.at('warning') == [status]
     assert os.path.getmtime(resolve_url(url, 'usb_camera')) == before
     assert manager.camera_info(640, 480).k[0] != 123.0
 
