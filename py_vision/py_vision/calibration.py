@@ -97,10 +97,14 @@ class Logger(Protocol):
         """Log a warning line."""
 
 
-def check_camera_name(camera_name: str) -> None:
-    """Raise CalibrationError unless camera_name is as camera_info_manager accepts it."""
-    # The name becomes part of a file name through ${NAME}: letters, digits and '_' only.
-    if not _CAMERA_NAME.match(camera_name):
+def is_valid_camera_name(camera_name: str) -> bool:
+    """Whether camera_name is as camera_info_manager accepts it: letters, digits and _ only."""
+    # The name becomes part of a file name through ${NAME}, so no '/' or '..'.
+    return bool(_CAMERA_NAME.match(camera_name))
+
+
+def _check_camera_name(camera_name: str) -> None:
+    if not is_valid_camera_name(camera_name):
         raise CalibrationError(
             'camera name %r is not usable: it must be letters, digits and _ only' % camera_name)
 
@@ -115,17 +119,19 @@ def resolve_url(url: str, camera_name: str) -> str:
 
     An empty URL means DEFAULT_URL. Raise CalibrationError if the URL cannot be used.
     """
+    url = url or DEFAULT_URL
+
     def substitute(match):
         variable = match.group(1)
         if variable == 'NAME':
-            check_camera_name(camera_name)
+            _check_camera_name(camera_name)
             return camera_name
         if variable == 'ROS_HOME':
             return _ros_home()
         raise CalibrationError('%s: unknown substitution ${%s} (only ${NAME} and ${ROS_HOME})'
                                % (url, variable))
 
-    resolved = _SUBSTITUTION.sub(substitute, url or DEFAULT_URL)
+    resolved = _SUBSTITUTION.sub(substitute, url)
     scheme, _, rest = resolved.partition('://')
     scheme = scheme.lower()
     if scheme == 'file' and rest.startswith('/'):
@@ -154,10 +160,12 @@ class _Document:
         try:
             self.root = yaml.compose(text, Loader=yaml.SafeLoader)
         except yaml.MarkedYAMLError as error:
-            mark = error.problem_mark or error.context_mark
-            where = ' line %d' % (mark.line + 1) if mark else ''
-            raise CalibrationError('%s%s: not valid YAML: %s' % (
-                source, where, error.problem or error.context)) from None
+            mark, context = error.problem_mark or error.context_mark, error.context_mark
+            message = '%s%s: not valid YAML: %s' % (
+                source, ' line %d' % (mark.line + 1) if mark else '', error.problem)
+            if context is not None and context.line != mark.line:
+                message += ' (%s from line %d)' % (error.context, context.line + 1)
+            raise CalibrationError(message) from None
         except yaml.YAMLError as error:
             raise CalibrationError('%s: not valid YAML: %s' % (source, error)) from None
         if self.root is None:
@@ -280,13 +288,12 @@ def dump_calibration(camera_name: str, info: CameraInfo) -> str:
         'image_width': int(info.width),
         'image_height': int(info.height),
         'camera_name': camera_name,
+        'camera_matrix': _matrix_yaml(info.k, 3, 3),
+        'distortion_model': info.distortion_model,
+        'distortion_coefficients': _matrix_yaml(info.d, 1, len(info.d)),
+        'rectification_matrix': _matrix_yaml(info.r, 3, 3),
+        'projection_matrix': _matrix_yaml(info.p, 3, 4),
     }
-    for key, field, rows, cols in _MATRICES[:1]:
-        document[key] = _matrix_yaml(getattr(info, field), rows, cols)
-    document['distortion_model'] = info.distortion_model
-    document['distortion_coefficients'] = _matrix_yaml(info.d, 1, len(info.d))
-    for key, field, rows, cols in _MATRICES[1:]:
-        document[key] = _matrix_yaml(getattr(info, field), rows, cols)
     if info.binning_x or info.binning_y:
         document['binning_x'] = int(info.binning_x)
         document['binning_y'] = int(info.binning_y)
@@ -362,7 +369,7 @@ class CameraInfoManager:
 
     def __init__(self, camera_name: str, url: str, logger: Logger):
         """Raise CalibrationError for a camera name camera_info_manager would not accept."""
-        check_camera_name(camera_name)
+        _check_camera_name(camera_name)
         self._camera_name = camera_name
         self._url = url
         self._logger = logger
@@ -452,12 +459,11 @@ class CameraInfoManager:
         """
         Validate info, store it in the URL's file and publish it from the next frame on.
 
-        Return (success, status message); on failure the message says why and nothing changed.
+        Return (success, status message) for the service response and the caller's log; on
+        failure the message says why and nothing changed.
         """
         with self._store_lock:
-            success, message = self._store(info)
-            (self._logger.info if success else self._logger.warning)(message)
-            return success, message
+            return self._store(info)
 
     def _store(self, info: CameraInfo) -> tuple[bool, str]:
         problem = validate_camera_info(info)
