@@ -123,7 +123,8 @@ class CvBridgeTest(Node):
                                values['web_port'], 'cv_bridge_image')
         # Reliable with a queue of 10, the ROS 2 default: what the seed's rospy publisher
         # gives, and both reliable and best-effort subscribers (rqt_image_view) receive it.
-        self.images = ImagePublisher(self, 'cv_bridge_image', publisher_qos(), self.bridge_)
+        self.images = ImagePublisher(self, 'cv_bridge_image', publisher_qos(), self.bridge_,
+                                     lazy_raw=False)
         self.publisher_ = self.images.raw
         # Frames can wait in three places: the subscription's DDS history, the executor
         # (which takes one message per callback) and the worker's slot. The callback only

@@ -76,10 +76,16 @@ def _fill(msg, data):
 
 
 class ImagePublisher:
-    """Raw and compressed publishers of one base topic, each used only while it has readers."""
+    """
+    Raw and compressed publishers of one base topic, each used only while it has readers.
 
-    def __init__(self, node, base_topic: str, qos, bridge):
+    With lazy_raw False the raw image is published whatever its subscribers (a processing
+    node's output, which a subscriber still being discovered must not miss).
+    """
+
+    def __init__(self, node, base_topic: str, qos, bridge, lazy_raw: bool = True):
         self._bridge = bridge
+        self._lazy_raw = lazy_raw
         self.raw = node.create_publisher(Image, base_topic, qos)
         self.compressed = node.create_publisher(
             CompressedImage, compressed_topic(node, base_topic), qos)
@@ -103,7 +109,7 @@ class ImagePublisher:
         it is. Returns (raw published, compressed published).
         """
         raw_done = compressed_done = False
-        if self.wants_raw():
+        if self.wants_raw() or not self._lazy_raw:
             image = bgr()
             if image is not None:
                 msg = self._bridge.cv2_to_imgmsg(image, 'bgr8')

@@ -27,7 +27,7 @@ user set are applied again. The node is a thin adapter: the camera itself is cam
 import threading
 import time
 
-from py_vision.calibration import CameraInfoManager
+from py_vision.calibration import CameraInfoManager, is_valid_camera_name
 from py_vision.camera import Camera, CONTROL_NAMES, PIXEL_FORMATS, SourceError
 from py_vision.cv_bridge import CvBridge
 from py_vision.node_main import ConfigError, main_for
@@ -93,7 +93,7 @@ class USBImagePublisher(Node):
         Spec('frame_id', 'usb_camera', 'header.frame_id of the images', check=bool,
              accepted='a non-empty string', live=True),
         Spec('camera_name', 'usb_camera', 'camera name for the calibration (${NAME})',
-             check=bool, accepted='a non-empty string'),
+             check=is_valid_camera_name, accepted='letters, digits and _'),
         Spec('camera_info_url', '', 'calibration file: file:///path.yaml or '
              'package://pkg/path.yaml; empty: ~/.ros/camera_info/${NAME}.yaml if it exists'),
         Spec('reliability', 'reliable', 'publisher QoS reliability', choices=tuple(RELIABILITY)),
@@ -130,15 +130,15 @@ class USBImagePublisher(Node):
         self.images.jpeg_quality = values['jpeg_quality']
         self.info_publisher = self.create_publisher(
             CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
+        try:
+            self.camera = self._open()
+        except SourceError as error:
+            raise ConfigError(str(error))
         self.calibration = CameraInfoManager(
             values['camera_name'], values['camera_info_url'], self.get_logger())
         self.calibration.load()
         self.create_service(SetCameraInfo, sibling_topic(self, IMAGE_TOPIC, 'set_camera_info'),
                             self._set_camera_info)
-        try:
-            self.camera = self._open()
-        except SourceError as error:
-            raise ConfigError(str(error))
         self._apply_controls(self.camera, at_start=True)
         self.failed = False
         self._thread = threading.Thread(target=self._capture_loop, name='capture', daemon=True)

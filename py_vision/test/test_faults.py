@@ -217,7 +217,10 @@ def test_runtime_parameter_changes_are_applied_or_refused_with_a_reason(launch, 
     launch('usbcam_subscriber', {'display': 'none'})
     result = set_parameter(peer, 'usbcam_subscriber', 'stats_period', -1.0)
     assert not result.successful and 'stats_period' in result.reason
-    assert set_parameter(peer, 'usbcam_subscriber', 'stats_period', 2).successful
+    # A double parameter takes doubles, as every statically typed ROS 2 parameter does.
+    result = set_parameter(peer, 'usbcam_subscriber', 'stats_period', 2)
+    assert not result.successful and 'type' in result.reason.lower()
+    assert set_parameter(peer, 'usbcam_subscriber', 'stats_period', 2.0).successful
 
 
 @pytest.mark.parametrize('executable', ['usbcam_publisher', 'usbcam_subscriber',
