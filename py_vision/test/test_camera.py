@@ -1,0 +1,194 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The camera layer on the synthetic USB 2.0 camera: pixel formats, rates, JPEG, controls."""
+
+import cv2
+import numpy as np
+from py_vision import synthetic_camera
+from py_vision.camera import Camera
+from py_vision.frame_source import query_v4l2_controls, SourceError
+from py_vision.synthetic_camera import (
+    read_frame_index, reset_synthetic_devices, synthetic_frame, synthetic_jpeg, SyntheticCamera)
+import pytest
+
+
+@pytest.fixture(autouse=True)
+def clock(monkeypatch):
+    """Run the camera's pacing on a fake clock: reads return at once."""
+    now = [1000.0]
+
+    def sleep(seconds):
+        now[0] += max(seconds, 0.0)
+    monkeypatch.setattr(synthetic_camera, '_now', lambda: now[0])
+    monkeypatch.setattr(synthetic_camera, '_sleep', sleep)
+    reset_synthetic_devices()
+    return now
+
+
+@pytest.mark.parametrize('width,height,fps,fmt,rate', [
+    (640, 480, 30.0, 'yuyv', 30.0),      # YUYV fits the bus at VGA 30
+    (1280, 720, 30.0, 'mjpeg', 30.0),    # YUYV would give 10: MJPEG reaches 30
+    (1920, 1080, 30.0, 'mjpeg', 30.0),   # YUYV would give 5
+    (1280, 720, 10.0, 'yuyv', 10.0),     # YUYV reaches 10 at 720p
+    (640, 480, 200.0, 'mjpeg', 200.0),
+])
+def test_auto_reaches_the_requested_rate(width, height, fps, fmt, rate):
+    camera = Camera.open('synthetic', width, height, fps, 'auto')
+    assert (camera.pixel_format, camera.fps) == (fmt, rate)
+    assert (camera.width, camera.height) == (width, height)
+    assert camera.notes == []
+
+
+@pytest.mark.parametrize('width,height,rate', [(640, 480, 30.0), (1280, 720, 10.0),
+                                               (1920, 1080, 5.0)])
+def test_yuyv_is_limited_by_the_bus_and_says_so(width, height, rate):
+    camera = Camera.open('synthetic', width, height, 30.0, 'yuyv')
+    assert (camera.pixel_format, camera.fps) == ('yuyv', rate)
+    if rate < 30:
+        assert len(camera.notes) == 1
+        assert '30 fps requested, the camera gives %g fps in YUYV' % rate in camera.notes[0]
+        assert 'USB 2.0' in camera.notes[0]
+    assert 'YUYV at %g fps' % rate in camera.describe()
+
+
+def test_a_format_the_camera_refuses_is_one_note_naming_what_it_gives():
+    camera = Camera.open('synthetic?formats=yuyv', 640, 480, 30.0, 'mjpeg')
+    assert camera.pixel_format == 'yuyv'
+    assert camera.notes == ['the camera refuses pixel_format mjpeg; it gives yuyv instead']
+    camera = Camera.open('synthetic?formats=mjpeg', 640, 480, 30.0, 'yuyv')
+    assert camera.pixel_format == 'mjpeg'
+
+
+def test_auto_stays_with_yuyv_when_the_camera_has_no_mjpeg():
+    camera = Camera.open('synthetic?formats=yuyv', 1280, 720, 30.0, 'auto')
+    assert (camera.pixel_format, camera.fps) == ('yuyv', 10.0)
+    assert '30 fps requested, the camera gives 10 fps in YUYV' in camera.notes[0]
+
+
+def test_mjpeg_frames_are_the_cameras_jpeg_and_decode_only_on_demand():
+    camera = Camera.open('synthetic', 1280, 720, 30.0, 'mjpeg')
+    frame = camera.read()
+    assert frame.jpeg is not None and frame.jpeg.ndim == 1
+    assert bytes(frame.jpeg[:2]) == b'\xff\xd8'
+    assert not frame.decoded
+    assert bytes(frame.jpeg) == synthetic_jpeg(frame.index, 1280, 720)
+    image = frame.bgr()
+    assert frame.decoded and image.shape == (720, 1280, 3)
+    assert read_frame_index(image) == frame.index
+    # Within JPEG error of the camera's own picture.
+    error = np.abs(image.astype(int) - synthetic_frame(frame.index, 1280, 720)).mean()
+    assert error < 3.0
+    assert frame.bgr() is image  # decoded once
+
+
+def test_yuyv_frames_are_bgr_and_exact():
+    camera = Camera.open('synthetic', 640, 480, 30.0, 'yuyv')
+    frame = camera.read()
+    assert frame.jpeg is None
+    assert np.array_equal(frame.bgr(), synthetic_frame(frame.index, 640, 480))
+
+
+def test_spliced_mjpeg_is_byte_identical_to_a_whole_frame_encode():
+    # The synthetic camera encodes only the code strip per frame; the result must be the
+    # same bytes as encoding the whole frame, frame after frame.
+    for width, height in ((640, 480), (1280, 720), (1920, 1080), (100, 60)):
+        params = [cv2.IMWRITE_JPEG_QUALITY, synthetic_camera.JPEG_QUALITY,
+                  cv2.IMWRITE_JPEG_RST_INTERVAL, (width + 15) // 16]
+        for index in (3, 3 + 64, 3 + 128, 70):
+            whole = cv2.imencode('.jpg', synthetic_frame(index, width, height), params)[1]
+            assert synthetic_jpeg(index, width, height) == whole.tobytes()
+
+
+def test_raw_mode_conversion_switch_behaves_like_opencv():
+    cam = SyntheticCamera(640, 480, 30.0)
+    assert cam.set(cv2.CAP_PROP_FOURCC, cv2.VideoWriter_fourcc(*'MJPG'))
+    assert cam.read()[1].shape == (480, 640, 3)  # converted to BGR by default
+    assert cam.set(cv2.CAP_PROP_CONVERT_RGB, 0)
+    assert cam.get(cv2.CAP_PROP_CONVERT_RGB) == 0.0
+    data = cam.read()[1]
+    assert data.ndim == 1 and data.dtype == np.uint8 and bytes(data[:2]) == b'\xff\xd8'
+    assert not cam.set(cv2.CAP_PROP_FOURCC, cv2.VideoWriter_fourcc(*'H264'))
+    fourcc = int(cam.get(cv2.CAP_PROP_FOURCC))
+    assert bytes((fourcc >> s) & 0xFF for s in (0, 8, 16, 24)) == b'MJPG'
+
+
+def mean_bgr(camera):
+    return camera.read().bgr().reshape(-1, 3).mean(axis=0)
+
+
+@pytest.mark.parametrize('fmt', ['yuyv', 'mjpeg'])
+def test_controls_change_the_picture_in_the_expected_direction(fmt):
+    camera = Camera.open('synthetic', 320, 240, 30.0, fmt)
+    base = mean_bgr(camera)
+    assert camera.set_control('brightness', 40) == (True, 40, '')
+    assert mean_bgr(camera).mean() > base.mean() + 20
+    camera.set_control('brightness', 0)
+    camera.set_control('autoexposure', False)
+    assert camera.set_control('exposure', 400)[0]
+    assert mean_bgr(camera).mean() > base.mean() + 10
+    camera.set_control('exposure', 166)
+    camera.set_control('auto_white_balance', False)
+    camera.set_control('white_balance', 2800)  # a low temperature: bluer
+    b, g, r = mean_bgr(camera)
+    assert b - r > (base[0] - base[2]) + 10
+    camera.set_control('auto_white_balance', True)
+    def luma_spread():
+        return cv2.cvtColor(camera.read().bgr(), cv2.COLOR_BGR2GRAY).astype(float).std()
+    contrast_base = luma_spread()
+    camera.set_control('contrast', 8)
+    assert luma_spread() < contrast_base * 0.5
+    camera.set_control('contrast', 32)
+    camera.set_control('autofocus', False)
+    camera.set_control('focus', 200)
+    blurred = camera.read().bgr()
+    sharp_edges = np.abs(np.diff(synthetic_frame(0, 320, 240).astype(float), axis=1)).mean()
+    assert np.abs(np.diff(blurred.astype(float), axis=1)).mean() < sharp_edges * 0.7
+
+
+def test_controls_are_checked_against_the_cameras_own_ranges():
+    camera = Camera.open('synthetic', 320, 240, 30.0, 'yuyv')
+    assert set(camera.controls) == {
+        'brightness', 'contrast', 'saturation', 'sharpness', 'gain', 'auto_white_balance',
+        'white_balance', 'autoexposure', 'exposure', 'autofocus', 'focus'}
+    ok, got, message = camera.set_control('brightness', 200)
+    assert not ok and message == "brightness: 200 is out of the camera's range -64..64"
+    assert camera.source.get(cv2.CAP_PROP_BRIGHTNESS) == 0
+    assert camera.set_control('autoexposure', False) == (True, False, '')
+    assert camera.source.get(cv2.CAP_PROP_AUTO_EXPOSURE) == 1  # V4L2's manual mode
+
+
+def test_a_file_has_no_controls_and_says_which(tmp_path):
+    path = str(tmp_path / 'clip.avi')
+    writer = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*'MJPG'), 10.0, (64, 48))
+    for _ in range(3):
+        writer.write(np.zeros((48, 64, 3), np.uint8))
+    writer.release()
+    camera = Camera.open(path, 640, 480, 10.0, 'mjpeg')
+    assert camera.pixel_format == 'file' and camera.controls == {}
+    ok, _, message = camera.set_control('gain', 3)
+    assert not ok and message == '%s has no gain control' % path
+
+
+def test_a_missing_device_is_a_source_error():
+    with pytest.raises(SourceError, match='no such device'):
+        Camera.open('/dev/video_py_vision_missing', 640, 480, 10.0)
+
+
+def test_controls_of_something_that_is_not_a_v4l2_device_are_none(tmp_path):
+    # VIDIOC_QUERYCTRL on a file that is not a video device answers nothing, without error.
+    plain = tmp_path / 'not_a_camera'
+    plain.write_bytes(b'')
+    assert query_v4l2_controls(str(plain)) == {}
+    assert query_v4l2_controls(str(tmp_path / 'missing')) == {}
