@@ -30,8 +30,7 @@ import cv2
 import numpy as np
 from py_vision.synthetic_camera import read_frame_index, synthetic_frame
 import pytest
-from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
-from rcl_interfaces.srv import SetParameters
+from param_client import set_parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 import ros_harness
 from ros_harness import wait_until
@@ -186,21 +185,6 @@ def test_web_port_in_use_is_a_clear_error(launch):
         assert node.wait_exit(20) == 1
     out = node.output()
     assert 'Traceback' not in out and 'web_port' in out and str(port) in out
-
-
-def set_parameter(peer, node_name, name, value):
-    client = peer.node.create_client(SetParameters, '/%s/set_parameters' % node_name)
-    assert client.wait_for_service(timeout_sec=20)
-    if isinstance(value, str):
-        pvalue = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value)
-    elif isinstance(value, float):
-        pvalue = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=value)
-    else:
-        pvalue = ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=value)
-    future = client.call_async(SetParameters.Request(
-        parameters=[ParameterMsg(name=name, value=pvalue)]))
-    wait_until(future.done, 20, what='set_parameters reply')
-    return future.result().results[0]
 
 
 def test_runtime_parameter_changes_are_applied_or_refused_with_a_reason(launch, peer):

@@ -1,0 +1,58 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""What `ros2 param set/get/describe` do, through a test peer: the node's parameter services."""
+
+from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
+from rcl_interfaces.srv import DescribeParameters, GetParameters, SetParameters
+from ros_harness import wait_until
+
+
+def _call(peer, node_name, service_type, service, request):
+    client = peer.node.create_client(service_type, '/%s/%s' % (node_name, service))
+    assert client.wait_for_service(timeout_sec=20), 'no %s service on %s' % (service, node_name)
+    future = client.call_async(request)
+    wait_until(future.done, 20, what='%s reply from %s' % (service, node_name))
+    return future.result()
+
+
+def parameter_value(value):
+    """Return a ParameterValue of the Python value's type, as `ros2 param set` parses it."""
+    if isinstance(value, bool):
+        return ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=value)
+    if isinstance(value, str):
+        return ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value)
+    if isinstance(value, float):
+        return ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=value)
+    return ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=value)
+
+
+def set_parameter(peer, node_name, name, value):
+    """Set one parameter; return the SetParametersResult (successful, reason)."""
+    request = SetParameters.Request(
+        parameters=[ParameterMsg(name=name, value=parameter_value(value))])
+    return _call(peer, node_name, SetParameters, 'set_parameters', request).results[0]
+
+
+def get_parameters(peer, node_name, names):
+    """Return the ParameterValues of names, in order."""
+    request = GetParameters.Request(names=list(names))
+    return _call(peer, node_name, GetParameters, 'get_parameters', request).values
+
+
+def describe_parameters(peer, node_name, names):
+    """Return the ParameterDescriptors of names, in order."""
+    request = DescribeParameters.Request(names=list(names))
+    return _call(peer, node_name, DescribeParameters, 'describe_parameters',
+                 request).descriptors
