@@ -23,13 +23,16 @@ EXECUTABLES = ('usbcam_publisher', 'usbcam_subscriber', 'cv_bridge_test')
 
 
 def _exit_quietly(signum, frame):
-    raise SystemExit(0)
+    # Nothing exists yet that needs cleaning up (no node, device or DDS participant), and an
+    # exception raised here could surface inside a C extension's import as an ImportError.
+    sys.stdout.flush()
+    os._exit(0)
 
 
 # Importing rclpy, numpy and OpenCV takes a second or more on a board. When this package is
 # imported by one of its own executables, Ctrl-C or SIGTERM during that time ends the process
-# quietly instead of printing a KeyboardInterrupt traceback; node_main.run() then hands the
-# signals to rclpy. Library users importing py_vision keep their own signal handling.
+# quietly instead of printing a KeyboardInterrupt traceback; node_main.run() then installs its
+# own handler, which lets rclpy stop the node. Library users keep their own signal handling.
 if (os.path.basename(sys.argv[0] if sys.argv else '') in EXECUTABLES
         and threading.current_thread() is threading.main_thread()):
     for _signal in (signal.SIGINT, signal.SIGTERM):

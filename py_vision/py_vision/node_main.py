@@ -23,8 +23,10 @@ The `main()` every py_vision executable shares: start-up, spin and a quiet, clea
   own SIGINT after the terminal's) are ignored, so the clean-up always runs to its end.
 """
 
+import os
 import signal
 import sys
+import tempfile
 import threading
 
 from py_vision import dds
@@ -63,10 +65,39 @@ def install_quiet_signals():
 
 
 def _wants_help(argv):
-    user_args = argv[1:]
-    if '--ros-args' in user_args:
-        user_args = user_args[:user_args.index('--ros-args')]
-    return any(arg in ('-h', '--help') for arg in user_args)
+    # Anywhere on the line: a parameter value is part of its `name:=value` word.
+    return any(arg in ('-h', '--help') for arg in argv[1:])
+
+
+def _init_rclpy(argv):
+    """
+    Initialise rclpy with argv; return None, or what is wrong with the arguments in one line.
+
+    rcl prints its own lines about bad arguments before it raises: they are held back and
+    replaced by one line, and printed as they were when initialisation succeeds.
+    """
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as held:
+        os.dup2(held.fileno(), 2)
+        try:
+            rclpy.init(args=argv)
+            error = None
+        except Exception as failure:  # rclpy's own RCLError types for bad arguments
+            lines = [line for line in str(failure).splitlines() if line.strip()]
+            error = lines[0] if lines else type(failure).__name__
+            # rcl appends where in its sources the parse failed: not for users.
+            error = error.split('. Error:')[0].replace('failed to initialize rcl: ', '')
+            if 'UnknownROSArgs' in type(failure).__name__:
+                error = 'unknown ROS arguments %s' % error
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+        if error is None:
+            held.seek(0)
+            os.write(2, held.read())
+    return error
 
 
 def _shutdown_quietly():
@@ -92,14 +123,12 @@ def run(node_class, args=None):
         return 0
     install_quiet_signals()
     dds.use_packaged_profile()
-    try:
-        rclpy.init(args=argv)
-    except Exception as error:  # rclpy raises its own RCLError types for bad arguments
+    error = _init_rclpy(argv)
+    if error is not None:
         if _Stopping.requested:
             return 0
-        message = str(error).strip().splitlines()
-        sys.stderr.write('%s: invalid command line arguments: %s\n' % (
-            node_class.NODE_NAME, message[0] if message else type(error).__name__))
+        sys.stderr.write('%s: invalid command line arguments: %s (see --help)\n' % (
+            node_class.NODE_NAME, error))
         _shutdown_quietly()
         return 2
     _Stopping.rclpy_up = True
@@ -126,6 +155,7 @@ def run(node_class, args=None):
     finally:
         _Stopping.cleaning = True
         _Stopping.rclpy_up = False
+        _ignore_signals()
         if node is not None:
             node.close()
             if built:
@@ -134,6 +164,15 @@ def run(node_class, args=None):
     if getattr(node, 'failed', False):
         status = 1
     return status
+
+
+def _ignore_signals():
+    """Ignore SIGINT and SIGTERM from now on: the node is stopping and must finish doing so."""
+    # SIG_IGN, unlike a Python handler, survives the interpreter's finalisation, which
+    # otherwise puts the default action back while DDS participants are still being torn down.
+    if threading.current_thread() is threading.main_thread():
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, signal.SIG_IGN)
 
 
 def _has_logger(node):

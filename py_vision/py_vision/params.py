@@ -112,10 +112,18 @@ class Spec:
         return value
 
     def descriptor(self) -> ParameterDescriptor:
-        """Return the ROS descriptor: type, description, range, read-only."""
+        """
+        Return the ROS descriptor: type, description, range, read-only.
+
+        A parameter that is not set has no value to give it a type: it is declared
+        dynamically typed (so that `ros2 param get` and `dump` answer "not set" instead of
+        failing) and its type is checked here, in coerce(), when it is set.
+        """
         descriptor = ParameterDescriptor(
-            name=self.name, type=_TYPES[self.kind].value, description=self.description,
-            read_only=not self.live)
+            name=self.name, description=self.description, read_only=not self.live,
+            dynamic_typing=self.optional)
+        if not self.optional:
+            descriptor.type = _TYPES[self.kind].value
         constraints = self.accepts() if (self.accepted or self.choices) else ''
         descriptor.additional_constraints = constraints
         if self.value_range is not None:
@@ -190,7 +198,7 @@ class Parameters:
             node.undeclare_parameter(spec.name)
             if given is None:
                 if spec.optional:
-                    node.declare_parameter(spec.name, _TYPES[spec.kind], spec.descriptor(),
+                    node.declare_parameter(spec.name, None, spec.descriptor(),
                                            ignore_override=True)
                     return None
                 given = spec.default
