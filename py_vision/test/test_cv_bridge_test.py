@@ -27,6 +27,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_harness import wait_until
 from sensor_msgs.msg import Image
 from test_faults import set_parameter
+from test_web_browser import browser  # noqa: F401 (the headless Chromium fixture)
 
 RED = (0, 0, 255)  # BGR
 
@@ -274,3 +275,24 @@ def test_ctrl_c_during_a_long_processing_step_ends_cleanly(launch, peer):
     assert in_step['processed'] == 0 and in_step['frames_in'] >= 2, in_step
     assert node.stop(signal.SIGINT, timeout=5.0) == 0
     assert 'Traceback' not in node.output(), node.output()
+
+
+def test_the_browser_page_shows_what_was_processed_and_skipped(launch, browser):  # noqa: F811
+    node = launch('cv_bridge_test', params={
+        'simulated_work_ms': 300, 'display': 'web', 'web_port': 0})
+    url = node.wait_for_output(r'viewer at (http://\S+:\d+/)').group(1)
+    launch('usbcam_publisher', params=dict(CAMERA, framerate=10.0))
+    page = browser.new_page()
+    page.goto(url)
+    names = ('in', 'processed', 'skipped', 'processing', 'processing-p99', 'age', 'age-p99')
+
+    def filled():
+        shown = {name: page.locator('#stat-' + name).inner_text() for name in names}
+        return shown if shown['skipped'] not in ('', '-', '0') and shown['age-p99'] != '-' \
+            else None
+    shown = wait_until(filled, 30.0, interval=0.2, what='the processing stats on the page')
+    assert all(page.locator('#stat-' + name).is_visible() for name in names)
+    assert int(shown['in']) >= int(shown['processed']) + int(shown['skipped']), shown
+    assert float(shown['processing'].split()[0]) >= 300.0, shown
+    assert float(shown['age-p99'].split()[0]) >= float(shown['age'].split()[0]), shown
+    assert node.stop(signal.SIGINT) == 0
