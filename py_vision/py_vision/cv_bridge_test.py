@@ -170,6 +170,8 @@ class CvBridgeTest(Node):
             return
         if self.simulated_work_s > 0:
             simulated_work(self.simulated_work_s, lambda: self.worker.closed)
+            if self.worker.closed:
+                return  # close() was called: the node is being torn down, drop the frame
         # The bridge returns a writable image the node owns (a view of this message's data,
         # or a converted copy), so the circle is drawn in place.
         rows, cols = image.shape[:2]

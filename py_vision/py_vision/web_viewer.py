@@ -493,6 +493,15 @@ _PAGE = """<!DOCTYPE html>
       <dt>resolution</dt><dd id="stat-resolution">-</dd>
       <dt>encoding</dt><dd id="stat-encoding">-</dd>
       <dt>frames</dt><dd id="stat-frames">-</dd>
+      <dt class="proc" hidden>frames in</dt><dd class="proc" id="stat-in" hidden>-</dd>
+      <dt class="proc" hidden>processed</dt><dd class="proc" id="stat-processed" hidden>-</dd>
+      <dt class="proc" hidden>skipped</dt><dd class="proc" id="stat-skipped" hidden>-</dd>
+      <dt class="proc" hidden>processing p50</dt>
+      <dd class="proc" id="stat-processing" hidden>-</dd>
+      <dt class="proc" hidden>processing p99</dt>
+      <dd class="proc" id="stat-processing-p99" hidden>-</dd>
+      <dt class="proc" hidden>output age p50</dt><dd class="proc" id="stat-age" hidden>-</dd>
+      <dt class="proc" hidden>output age p99</dt><dd class="proc" id="stat-age-p99" hidden>-</dd>
       <dt>viewers</dt><dd id="stat-clients">-</dd>
     </dl>
     <div class="links"><a href="/snapshot.jpg" download>snapshot</a> &middot;
@@ -541,6 +550,18 @@ _PAGE = """<!DOCTYPE html>
       show("stat-encoding", s.encoding || "-");
       show("stat-frames", (typeof s.frames === "number") ? String(s.frames) : "-");
       show("stat-clients", String(s.clients));
+      // A processing node (cv_bridge_test) also reports what it skipped and how long it took.
+      const processing = typeof s.frames_in === "number";
+      document.querySelectorAll(".proc").forEach(function (e) { e.hidden = !processing; });
+      if (processing) {
+        show("stat-in", String(s.frames_in));
+        show("stat-processed", String(s.processed));
+        show("stat-skipped", String(s.skipped));
+        show("stat-processing", num(s.processing_ms_p50, 1, " ms"));
+        show("stat-processing-p99", num(s.processing_ms_p99, 1, " ms"));
+        show("stat-age", num(s.age_ms_p50, 1, " ms"));
+        show("stat-age-p99", num(s.age_ms_p99, 1, " ms"));
+      }
       if (s.viewer_frames > 0) {
         setStatus("live", "live");
         if (!retry) { message(""); }

@@ -14,16 +14,20 @@
 
 """The installed cv_bridge_test node end to end: images in, images with the red circle out."""
 
+import json
 import re
 import signal
 import urllib.request
 
 import cv2
 import numpy as np
+from py_vision.synthetic_camera import read_frame_index
 import pytest
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_harness import wait_until
 from sensor_msgs.msg import Image
+from test_faults import set_parameter
+from test_web_browser import browser  # noqa: F401 (the headless Chromium fixture)
 
 RED = (0, 0, 255)  # BGR
 
@@ -86,9 +90,9 @@ def test_circle_is_drawn_on_large_images_and_the_rest_is_unchanged(launch, peer)
         (rng.integers(0, 256, (100, 90, 3), np.uint8), 'rgb8', cv2.COLOR_RGB2BGR),
         (rng.integers(0, 256, (120, 160), np.uint8), 'mono8', cv2.COLOR_GRAY2BGR),
     ]
-    for stamp, (image, encoding, _) in enumerate(cases, start=1):
-        probe.publisher.publish(image_msg(image, encoding, stamp, 'frame_%d' % stamp))
     for stamp, (image, encoding, to_bgr) in enumerate(cases, start=1):
+        # One at a time: images published faster than they are processed would be skipped.
+        probe.publisher.publish(image_msg(image, encoding, stamp, 'frame_%d' % stamp))
         out = probe.result_for(stamp)
         assert out.header.frame_id == 'frame_%d' % stamp
         assert out.header.stamp.nanosec == 0
@@ -170,3 +174,125 @@ def test_bad_messages_are_logged_rate_limited_and_the_node_keeps_going(launch, p
     assert counts[0] == 1 and counts[1] > 20, 'the error lines are not rate-limited'
     assert node.stop(signal.SIGINT) == 0
     assert 'Traceback' not in node.output()
+
+
+def test_every_frame_is_processed_in_order_when_processing_keeps_up(launch, peer):
+    node = launch('cv_bridge_test')
+    probe = Probe(peer)
+    probe.wait_connected(node)
+    image = np.zeros((120, 160, 3), np.uint8)
+    for stamp in range(1, 31):  # each one arrives when the previous one is done
+        probe.publisher.publish(image_msg(image, 'bgr8', stamp))
+        probe.result_for(stamp)
+    stamps = [m.header.stamp.sec for m in probe.received if m.header.stamp.sec != 999]
+    assert stamps == list(range(1, 31))
+    assert node.stop(signal.SIGINT) == 0
+
+
+STATS_LINE = re.compile(
+    r'frames in (\d+), processed (\d+), skipped (\d+), processing p50 ([\d.]+) ms '
+    r'p99 ([\d.]+) ms, output age p50 ([\d.]+) ms p99 ([\d.]+) ms')
+CAMERA = {'video_device': 'synthetic', 'image_width': 320, 'image_height': 240}
+
+
+def stamp_ns(msg):
+    return msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
+
+
+def test_a_slow_step_works_on_the_newest_frame_and_counts_the_skipped_ones(launch, peer):
+    # What the probe receives from the camera and from the node, in the order it arrives.
+    events = []
+    peer.node.create_subscription(
+        Image, 'usb_camera/image', lambda m: events.append(('camera', stamp_ns(m), m)),
+        QoSProfile(depth=5, reliability=ReliabilityPolicy.BEST_EFFORT))
+    peer.node.create_subscription(
+        Image, 'cv_bridge_image', lambda m: events.append(('output', stamp_ns(m), m)),
+        QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+    node = launch('cv_bridge_test', params={'simulated_work_ms': 600})
+    camera = launch('usbcam_publisher', params=dict(CAMERA, framerate=10.0))
+
+    def outputs():
+        return [event for event in list(events) if event[0] == 'output']
+    wait_until(lambda: len(outputs()) >= 6, 60.0, interval=0.1, what='six processed frames')
+    # When output k is published the worker takes the newest frame it has, so output k + 1
+    # comes from a frame at least as new as the newest one the probe had seen before output k
+    # arrived (give or take frames still on their way). Working through the subscription's
+    # queue of 10 instead would lag about nine frames (900 ms) behind it.
+    newest_seen, previous, lags = None, None, []
+    for kind, stamp, msg in list(events):
+        if kind == 'camera':
+            newest_seen = max(stamp, newest_seen or stamp)
+            continue
+        if previous is not None:
+            lags.append((previous - stamp) / 1e9)
+        previous = newest_seen
+    assert lags and max(lags) <= 0.35, 'outputs lag the newest frame by %s s' % lags
+    indices = [read_frame_index(as_bgr(event[2])) for event in outputs()]
+    assert None not in indices and indices == sorted(indices), indices
+    line = node.wait_for_output(STATS_LINE.pattern, timeout=15.0)
+    frames_in, processed, skipped = (int(v) for v in line.groups()[:3])
+    assert skipped > 0 and processed > 0, line.group(0)
+    # Every frame is accounted for: processed, skipped, or waiting / in progress.
+    assert 0 <= frames_in - processed - skipped <= 2, line.group(0)
+    assert float(line.group(4)) >= 600.0, 'the simulated work did not take 600 ms'
+    assert camera.stop(signal.SIGINT) == 0
+    assert node.stop(signal.SIGINT) == 0
+    assert 'Traceback' not in node.output()
+
+
+def test_simulated_work_can_be_changed_while_running(launch, peer):
+    received = peer.collect(Image, 'cv_bridge_image',
+                            QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+    node = launch('cv_bridge_test')
+    launch('usbcam_publisher', params=dict(CAMERA, framerate=10.0))
+    wait_until(lambda: received, 30.0, interval=0.1, what='a processed frame')
+    result = set_parameter(peer, 'cv_bridge_test', 'simulated_work_ms', 300)
+    assert result.successful, result.reason
+    node.wait_for_output('simulated work is now 300 ms a frame')
+
+    def slow_steps_reported():
+        # Once the 5 s window holds only slow steps, the busy 300 ms show in the median.
+        return any(float(m.group(4)) >= 300.0 for m in STATS_LINE.finditer(node.output()))
+    wait_until(slow_steps_reported, 30.0, interval=0.2, what='processing p50 >= 300 ms')
+    refused = set_parameter(peer, 'cv_bridge_test', 'simulated_work_ms', 20000)
+    assert not refused.successful and '0..10000' in refused.reason
+    assert node.stop(signal.SIGINT) == 0
+
+
+def test_ctrl_c_during_a_long_processing_step_ends_cleanly(launch, peer):
+    node = launch('cv_bridge_test', params={
+        'simulated_work_ms': 10000, 'display': 'web', 'web_port': 0})
+    url = node.wait_for_output(r'viewer at (http://\S+:\d+/)').group(1)
+    launch('usbcam_publisher', params=dict(CAMERA, framerate=10.0))
+
+    def step_in_progress():
+        # What the browser page shows: the first frame is in its 10 s step, later ones skip.
+        with urllib.request.urlopen(url + 'stats', timeout=5) as answer:
+            stats = json.loads(answer.read())
+        return stats if stats.get('skipped', 0) >= 1 else None
+    in_step = wait_until(step_in_progress, 30.0, interval=0.2,
+                         what='a frame in processing and one skipped')
+    assert in_step['processed'] == 0 and in_step['frames_in'] >= 2, in_step
+    assert node.stop(signal.SIGINT, timeout=5.0) == 0
+    assert 'Traceback' not in node.output(), node.output()
+
+
+def test_the_browser_page_shows_what_was_processed_and_skipped(launch, browser):  # noqa: F811
+    node = launch('cv_bridge_test', params={
+        'simulated_work_ms': 300, 'display': 'web', 'web_port': 0})
+    url = node.wait_for_output(r'viewer at (http://\S+:\d+/)').group(1)
+    launch('usbcam_publisher', params=dict(CAMERA, framerate=10.0))
+    page = browser.new_page()
+    page.goto(url)
+    names = ('in', 'processed', 'skipped', 'processing', 'processing-p99', 'age', 'age-p99')
+
+    def filled():
+        shown = {name: page.locator('#stat-' + name).inner_text() for name in names}
+        return shown if shown['skipped'] not in ('', '-', '0') and shown['age-p99'] != '-' \
+            else None
+    shown = wait_until(filled, 30.0, interval=0.2, what='the processing stats on the page')
+    assert all(page.locator('#stat-' + name).is_visible() for name in names)
+    assert int(shown['in']) >= int(shown['processed']) + int(shown['skipped']), shown
+    assert float(shown['processing'].split()[0]) >= 300.0, shown
+    assert float(shown['age-p99'].split()[0]) >= float(shown['age'].split()[0]), shown
+    assert node.stop(signal.SIGINT) == 0

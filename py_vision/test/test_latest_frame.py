@@ -1,0 +1,186 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""LatestFrameWorker: a slow step takes the newest item, a fast one every item in order."""
+
+import threading
+
+from py_vision.latest_frame import LatestFrameWorker
+import pytest
+from ros_harness import wait_until
+
+TIMEOUT = 10.0  # generous: only reached when something is broken
+
+
+class Recorder:
+    """A processing step that records its items and can be held inside a step."""
+
+    def __init__(self):
+        self.items = []
+        self.started = threading.Event()
+        self.release = threading.Event()
+        self.release.set()
+
+    def __call__(self, item):
+        self.started.set()
+        assert self.release.wait(TIMEOUT)
+        self.items.append(item)
+
+
+@pytest.fixture
+def closing():
+    """Close every worker a test makes, also when the test fails."""
+    workers = []
+    yield workers.append
+    for worker in workers:
+        worker.close()
+
+
+def test_a_slow_step_takes_the_newest_item_and_counts_the_ones_it_skipped(closing):
+    step = Recorder()
+    worker = LatestFrameWorker(step)
+    closing(worker)
+    step.release.clear()
+    worker.offer(0)
+    assert step.started.wait(TIMEOUT)
+    for item in range(1, 11):  # all arrive while item 0 is being processed
+        worker.offer(item)
+    step.release.set()
+    wait_until(lambda: worker.processed == 2, TIMEOUT, what='the second step')
+    assert step.items == [0, 10]
+    assert (worker.frames_in, worker.processed, worker.skipped) == (11, 2, 9)
+    # Then the worker waits for the next item, it does not run again on an old one.
+    worker.offer(11)
+    wait_until(lambda: worker.processed == 3, TIMEOUT, what='the third step')
+    assert step.items == [0, 10, 11] and worker.skipped == 9
+
+
+def test_items_that_arrive_when_the_step_is_ready_are_all_processed_in_order(closing):
+    step = Recorder()
+    worker = LatestFrameWorker(step)
+    closing(worker)
+    for item in range(50):
+        worker.offer(item)
+        wait_until(lambda: len(step.items) == item + 1, TIMEOUT, interval=0.001,
+                   what='item %d to be processed' % item)
+    assert step.items == list(range(50))
+    assert (worker.frames_in, worker.processed, worker.skipped) == (50, 50, 0)
+
+
+def test_none_is_an_item_like_any_other(closing):
+    step = Recorder()
+    worker = LatestFrameWorker(step)
+    closing(worker)
+    worker.offer(None)
+    wait_until(lambda: worker.processed == 1, TIMEOUT, what='the step')
+    assert step.items == [None]
+
+
+class FakeClock:
+    def __init__(self):
+        self.now = 1000.0
+
+    def __call__(self):
+        return self.now
+
+
+def test_statistics_give_counts_and_percentiles_of_the_recent_window(closing):
+    clock = FakeClock()
+    durations = [i / 100 for i in range(1, 101)]  # 10 ms .. 1000 ms, one step each
+
+    def step(duration):
+        clock.now += duration
+    worker = LatestFrameWorker(step, window_s=100.0, clock=clock)
+    closing(worker)
+    empty = worker.snapshot()
+    assert empty == {'frames_in': 0, 'processed': 0, 'skipped': 0,
+                     'processing_ms_p50': None, 'processing_ms_p99': None,
+                     'age_ms_p50': None, 'age_ms_p99': None}
+    for count, duration in enumerate(durations, start=1):
+        worker.offer(duration)
+        wait_until(lambda: worker.processed == count, TIMEOUT, interval=0.001,
+                   what='step %d' % count)
+    for age_ms in range(200, 0, -1):  # 1 .. 200 ms, in any order
+        worker.record_age(age_ms / 1e3)
+    snap = worker.snapshot()
+    assert (snap['frames_in'], snap['processed'], snap['skipped']) == (100, 100, 0)
+    assert snap['processing_ms_p50'] == pytest.approx(500.0)
+    assert snap['processing_ms_p99'] == pytest.approx(990.0)
+    assert snap['age_ms_p50'] == pytest.approx(100.0)
+    assert snap['age_ms_p99'] == pytest.approx(198.0)
+    # The percentiles describe the last window_s seconds; the counts are since start.
+    clock.now += 100.1
+    later = worker.snapshot()
+    assert later['processing_ms_p50'] is None and later['age_ms_p99'] is None
+    assert later['processed'] == 100
+
+
+def test_a_step_that_raises_is_reported_and_the_worker_goes_on():
+    errors = []
+
+    def step(item):
+        if item == 'bad':
+            raise ValueError('cannot use %s' % item)
+        done.append(item)
+    done = []
+    worker = LatestFrameWorker(step, on_error=errors.append)
+    try:
+        worker.offer('bad')
+        wait_until(lambda: worker.processed == 1, TIMEOUT, what='the failing step')
+        worker.offer('good')
+        wait_until(lambda: worker.processed == 2, TIMEOUT, what='the next step')
+    finally:
+        worker.close()
+    assert done == ['good']
+    assert [str(error) for error in errors] == ['cannot use bad']
+
+
+def test_close_ends_a_long_step_that_polls_closed_and_drops_the_waiting_item():
+    seen_closed = threading.Event()
+    started = threading.Event()
+    holder = {}
+
+    def long_step(item):
+        started.set()
+        # A step of "forever" that checks for shutdown, as cv_bridge_test's simulated work.
+        while not holder['worker'].closed:
+            seen_closed.wait(0.001)
+        seen_closed.set()
+    worker = holder['worker'] = LatestFrameWorker(long_step)
+    worker.offer(1)
+    assert started.wait(TIMEOUT)
+    worker.offer(2)  # waits behind the long step
+    assert worker.close(timeout=TIMEOUT)
+    assert seen_closed.is_set()
+    assert (worker.frames_in, worker.processed, worker.skipped) == (2, 1, 1)
+    worker.offer(3)  # after close: ignored
+    assert worker.frames_in == 2 and worker.processed == 1
+
+
+def test_close_does_not_wait_forever_for_a_step_that_ignores_it_nor_report_its_failure():
+    step = Recorder()
+    errors = []
+
+    def failing_step(item):
+        step(item)
+        raise RuntimeError('the publisher is gone')
+    worker = LatestFrameWorker(failing_step, on_error=errors.append)
+    step.release.clear()
+    worker.offer(1)
+    assert step.started.wait(TIMEOUT)
+    assert not worker.close(timeout=0.05)  # the step is still held: close gives up waiting
+    step.release.set()
+    wait_until(lambda: worker.processed == 1, TIMEOUT, what='the held step to end')
+    assert errors == []
+    assert worker.close(timeout=TIMEOUT)
