@@ -33,27 +33,28 @@ from launch_ros.substitutions import FindPackageShare
 
 def start_viewer(context):
     """Return the subscriber, remapped to cv_bridge_image, with the display if one is given."""
-    parameters = [LaunchConfiguration('params_file')]
-    if LaunchConfiguration('display').perform(context):
-        parameters.append(
-            {'display': ParameterValue(LaunchConfiguration('display'), value_type=str)})
+    display = LaunchConfiguration('display')
+    given = {}
+    if display.perform(context):
+        given['display'] = ParameterValue(display, value_type=str)
     return [Node(package='py_vision', executable='usbcam_subscriber', output='screen',
-                 parameters=parameters, remappings=[('usb_camera/image', 'cv_bridge_image')])]
+                 parameters=[LaunchConfiguration('params_file'), given],
+                 remappings=[('usb_camera/image', 'cv_bridge_image')])]
 
 
 def generate_launch_description():
     """Declare the arguments, include the camera, start the processing node and the viewer."""
-    share = FindPackageShare('py_vision')
     return LaunchDescription([
         DeclareLaunchArgument(
             'params_file', description='parameter file of the py_vision nodes',
-            default_value=PathJoinSubstitution([share, 'config', 'params.yaml'])),
+            default_value=PathJoinSubstitution(
+                [FindPackageShare('py_vision'), 'config', 'params.yaml'])),
         DeclareLaunchArgument(
             'display', default_value='',
             description='where the viewer shows the processed frames: window, web, none or '
                         'auto (empty: the value in params_file)'),
-        IncludeLaunchDescription(PythonLaunchDescriptionSource(
-            PathJoinSubstitution([share, 'launch', 'camera.launch.py']))),
+        IncludeLaunchDescription(PythonLaunchDescriptionSource(PathJoinSubstitution(
+            [FindPackageShare('py_vision'), 'launch', 'camera.launch.py']))),
         Node(package='py_vision', executable='cv_bridge_test', output='screen',
              parameters=[LaunchConfiguration('params_file')]),
         OpaqueFunction(function=start_viewer),
