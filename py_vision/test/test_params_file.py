@@ -94,4 +94,3 @@ def test_a_node_runs_with_exactly_the_values_of_its_params_file(launch, peer, no
     proc = launch(node, extra_args=['--params-file', str(params_file)])
     assert typed(running_parameters(peer, proc, node)) == \
         typed(content[node]['ros__parameters'])
-
