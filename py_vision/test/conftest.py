@@ -15,7 +15,9 @@
 """Shared fixtures: the tests import and run the colcon-installed py_vision, not the sources."""
 
 import os
+import shutil
 import sys
+import tempfile
 
 import pytest
 import ros_harness
@@ -27,11 +29,34 @@ os.environ.pop('ROS_LOCALHOST_ONLY', None)
 os.environ.pop('ROS_STATIC_PEERS', None)
 
 if not ros_harness.SITE_PACKAGES.is_dir():
-    raise pytest.UsageError('%s is missing: build the package first (scripts/setup.sh)'
-                            % ros_harness.SITE_PACKAGES)
+    raise pytest.UsageError(
+        '%s is missing: build the package first (scripts/setup.sh, or colcon build in a '
+        'workspace before colcon test)' % ros_harness.SITE_PACKAGES)
+# Before the source folder that `python -m pytest` (and so `colcon test`) puts on sys.path.
 sys.path.insert(0, str(ros_harness.SITE_PACKAGES))
 # As after `source install/setup.bash`, for code that looks itself up through the ament index.
 os.environ['AMENT_PREFIX_PATH'] = ros_harness.installed_env()['AMENT_PREFIX_PATH']
+# The in-process peers' rcl log files go to a directory removed when the session ends.
+_SESSION_ROS_LOG_DIR = tempfile.mkdtemp(prefix='py_vision_test_ros_log_')
+os.environ['ROS_LOG_DIR'] = _SESSION_ROS_LOG_DIR
+
+
+def pytest_unconfigure(config):
+    shutil.rmtree(_SESSION_ROS_LOG_DIR, ignore_errors=True)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """Add the tail of every node's log to the failure of a test that started nodes."""
+    outcome = yield
+    report = outcome.get_result()
+    processes = getattr(item, 'node_processes', ())
+    if report.when == 'call' and report.failed and hasattr(report.longrepr, 'addsection'):
+        message = str(call.excinfo.value) if call.excinfo else ''
+        for proc in processes:
+            tail = proc.tail()
+            if tail not in message:  # a NodeProcess failure already shows its own log
+                report.longrepr.addsection('log of %s' % proc.name, tail)
 
 
 @pytest.fixture
@@ -44,22 +69,29 @@ def domain_id():
 
 @pytest.fixture
 def ros_env(domain_id):
-    """Return the environment for node processes: installed package, own domain, local host."""
+    """
+    Return the environment for node processes: installed package, own domain, local host.
+
+    The nodes' rcl log files (ROS_LOG_DIR) go to a directory deleted after the test.
+    """
+    log_dir = tempfile.mkdtemp(prefix='py_vision_ros_log_')
     env = ros_harness.installed_env()
     env.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
-               PYTHONUNBUFFERED='1', RCUTILS_COLORIZED_OUTPUT='0')
+               PYTHONUNBUFFERED='1', RCUTILS_COLORIZED_OUTPUT='0', ROS_LOG_DIR=log_dir)
     env.pop('ROS_LOCALHOST_ONLY', None)
-    return env
+    yield env
+    shutil.rmtree(log_dir, ignore_errors=True)
 
 
 @pytest.fixture
-def launch(ros_env):
+def launch(ros_env, request):
     """
     Start installed executables by name, with parameters and remappings as dicts.
 
-    Every process is stopped at the end of the test, whatever happened.
+    Every process is stopped, and its log deleted, at the end of the test, whatever happened;
+    when the test fails, its report ends with the tail of each process's log.
     """
-    started = []
+    started = request.node.node_processes = []
 
     def start(executable, params=None, remaps=None, extra_args=(), env=None, name=None):
         args = ros_harness.ros_args(params, remaps) + list(extra_args)

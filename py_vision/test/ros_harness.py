@@ -32,11 +32,38 @@ import tempfile
 import threading
 import time
 
+PACKAGE = 'py_vision'
 REPO = Path(__file__).resolve().parents[2]
-INSTALL = Path(os.environ.get('PY_VISION_INSTALL', REPO / 'install')).resolve()
-EXECUTABLES = INSTALL / 'py_vision' / 'lib' / 'py_vision'
-SITE_PACKAGES = INSTALL / 'py_vision' / 'lib' / ('python%d.%d' % sys.version_info[:2]) / \
-    'site-packages'
+_INDEX_MARKER = Path('share', 'ament_index', 'resource_index', 'packages', PACKAGE)
+
+
+def _find_prefix():
+    """
+    Return the colcon prefix py_vision is installed in, and whether the environment has it.
+
+    PY_VISION_INSTALL (a colcon install base) comes first, then install/ beside the package
+    source (what scripts/setup.sh builds), then the environment: what `colcon test` gives the
+    tests, or a sourced install/setup.bash (AMENT_PREFIX_PATH). Without any of them the first
+    two name the place conftest.py reports as missing.
+    """
+    base = os.environ.get('PY_VISION_INSTALL')
+    if base:
+        return Path(base).resolve() / PACKAGE, False
+    beside = REPO / 'install' / PACKAGE
+    if beside.is_dir():
+        return beside, False
+    for prefix in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep):
+        if prefix and (Path(prefix) / _INDEX_MARKER).is_file():
+            return Path(prefix).resolve(), True
+    return beside, False
+
+
+PREFIX, FROM_ENVIRONMENT = _find_prefix()
+EXECUTABLES = PREFIX / 'lib' / PACKAGE
+SITE_PACKAGES = PREFIX / 'lib' / ('python%d.%d' % sys.version_info[:2]) / 'site-packages'
+SHARE = PREFIX / 'share' / PACKAGE
+# How many lines of a node's log a failure message shows.
+LOG_TAIL_LINES = 40
 
 # Fast DDS accepts domain ids up to 232 with the default port mapping.
 _DOMAIN_RANGE = range(1, 200)
@@ -44,15 +71,27 @@ _LOCK_DIR = Path(tempfile.gettempdir()) / 'py_vision_test_domains'
 
 
 def installed_env():
-    """Return os.environ plus what `source install/setup.bash` adds (computed once)."""
+    """
+    Return the environment the installed executables run in (computed once).
+
+    That is os.environ plus what `source install/setup.bash` adds, or, when the environment
+    already has the package (`colcon test`, a sourced workspace), os.environ with the package's
+    Python path made sure of.
+    """
     if not hasattr(installed_env, 'cache'):
-        setup = INSTALL / 'setup.bash'
-        if not setup.is_file():
-            raise RuntimeError('%s is missing: build first with scripts/setup.sh' % setup)
-        out = subprocess.run(['bash', '-c', 'source "$0" && env -0', str(setup)],
-                             check=True, capture_output=True).stdout
-        installed_env.cache = dict(
-            item.split('=', 1) for item in out.decode().split('\0') if '=' in item)
+        if FROM_ENVIRONMENT:
+            env = dict(os.environ)
+            paths = env.get('PYTHONPATH', '').split(os.pathsep)
+            if str(SITE_PACKAGES) not in paths:
+                env['PYTHONPATH'] = os.pathsep.join([str(SITE_PACKAGES)] + [p for p in paths if p])
+        else:
+            setup = PREFIX.parent / 'setup.bash'
+            if not setup.is_file():
+                raise RuntimeError('%s is missing: build first with scripts/setup.sh' % setup)
+            out = subprocess.run(['bash', '-c', 'source "$0" && env -0', str(setup)],
+                                 check=True, capture_output=True).stdout
+            env = dict(item.split('=', 1) for item in out.decode().split('\0') if '=' in item)
+        installed_env.cache = env
     return dict(installed_env.cache)
 
 
@@ -103,41 +142,70 @@ def ros_args(params=None, remaps=None):
 
 
 class NodeProcess:
-    """One installed executable running in its own process, output captured to a file."""
+    """
+    One installed executable running in its own process, output captured to a file.
+
+    Every failure it raises ends with the tail of the node's own log; kill() ends the process
+    and deletes that log.
+    """
 
     def __init__(self, executable, args, env, name=None):
         self.name = name or executable
-        self._log = tempfile.NamedTemporaryFile(prefix='py_vision_%s_' % self.name,
-                                                suffix='.log', delete=False)
+        handle, self.log_path = tempfile.mkstemp(prefix='py_vision_%s_' % self.name,
+                                                 suffix='.log')
         path = executable if os.sep in executable else str(EXECUTABLES / executable)
         self.cmd = [path] + list(args)
-        self.proc = subprocess.Popen(self.cmd, env=env, stdout=self._log,
-                                     stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                     start_new_session=True)
+        try:
+            self.proc = subprocess.Popen(self.cmd, env=env, stdout=handle,
+                                         stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                         start_new_session=True)
+        except BaseException:
+            os.unlink(self.log_path)
+            raise
+        finally:
+            os.close(handle)
 
     def output(self):
         """Everything the process printed so far (stdout and stderr interleaved)."""
-        return Path(self._log.name).read_text(errors='replace')
+        return Path(self.log_path).read_text(errors='replace')
+
+    def tail(self, lines=LOG_TAIL_LINES):
+        """Return the last lines of the output, headed by the command and its state."""
+        try:
+            text = self.output()
+        except OSError as error:  # already deleted by kill()
+            text = '(log unavailable: %s)' % error
+        kept = text.splitlines()[-lines:]
+        status = self.proc.poll()
+        state = 'running' if status is None else 'exit status %s' % status
+        return '--- %s (%s), last %d lines of its log: %s\n%s' % (
+            self.name, state, len(kept), ' '.join(self.cmd), '\n'.join(kept))
+
+    def fail(self, message):
+        """Raise AssertionError with message followed by the tail of the node's log."""
+        # from None: a timeout re-raised here is one message, not a chain of two.
+        raise AssertionError('%s\n%s' % (message, self.tail())) from None
 
     def wait_for_output(self, pattern, timeout=20.0):
         """Wait until the output matches the regex pattern; return the match."""
         regex = re.compile(pattern)
-
-        def found():
-            match = regex.search(self.output())
-            if not match and self.proc.poll() is not None:
-                raise AssertionError('%s exited with %s before printing %r:\n%s' % (
-                    self.name, self.proc.returncode, pattern, self.output()))
-            return match
-        return wait_until(found, timeout, 0.05, 'output %r from %s' % (pattern, self.name))
+        try:
+            wait_until(lambda: regex.search(self.output()) or self.proc.poll() is not None,
+                       timeout, 0.05, 'output %r from %s' % (pattern, self.name))
+        except AssertionError as error:
+            self.fail(str(error))
+        match = regex.search(self.output())
+        if not match:
+            self.fail('%s exited with %s before printing %r' % (
+                self.name, self.proc.returncode, pattern))
+        return match
 
     def wait_exit(self, timeout=10.0):
         """Wait for the process to end by itself; return its exit status."""
         try:
             return self.proc.wait(timeout)
         except subprocess.TimeoutExpired:
-            raise AssertionError('%s still running after %.1f s:\n%s' % (
-                self.name, timeout, self.output()))
+            self.fail('%s still running after %.1f s' % (self.name, timeout))
 
     def stop(self, sig=signal.SIGINT, timeout=5.0):
         """Send sig and wait for the exit; kill the whole group if it does not end in time."""
@@ -148,13 +216,13 @@ class NodeProcess:
             except subprocess.TimeoutExpired:
                 os.killpg(self.proc.pid, signal.SIGKILL)
                 self.proc.wait()
-                raise AssertionError('%s ignored %s for %.1f s:\n%s' % (
-                    self.name, signal.Signals(sig).name, timeout, self.output()))
+                self.fail('%s ignored %s for %.1f s' % (
+                    self.name, signal.Signals(sig).name, timeout))
         return self.proc.returncode
 
     def kill(self):
         """
-        End the process if it still runs: Ctrl-C first, SIGKILL only if that fails.
+        End the process if it still runs (Ctrl-C, then SIGKILL); delete its log.
 
         A SIGKILLed node leaves its Fast DDS shared-memory segment in /dev/shm behind.
         """
@@ -163,7 +231,10 @@ class NodeProcess:
                 self.stop(signal.SIGINT, timeout=5.0)
             except AssertionError:
                 pass  # stop() has killed it
-        self._log.close()
+        try:
+            os.unlink(self.log_path)
+        except FileNotFoundError:
+            pass
 
 
 class RosPeer:
@@ -197,6 +268,17 @@ class RosPeer:
             qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)
         self.node.create_subscription(msg_type, topic, received.append, qos)
         return received
+
+    def call(self, srv_type, name, request, timeout=10.0):
+        """Call a service once its server is up; return the response (bounded waits)."""
+        client = self.node.create_client(srv_type, name)
+        try:
+            wait_until(client.service_is_ready, timeout, 0.05, 'service %s' % name)
+            future = client.call_async(request)
+            wait_until(future.done, timeout, 0.02, 'a response from %s' % name)
+            return future.result()
+        finally:
+            self.node.destroy_client(client)
 
     def close(self):
         import rclpy

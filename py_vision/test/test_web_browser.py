@@ -15,8 +15,9 @@
 """
 The browser viewer in a real browser: headless Chromium watching the installed nodes.
 
-Needs Debian's `chromium` package (or CHROMIUM=/path/to/chromium). Without it the test is
-skipped on a developer's PC, and fails when the CI variable is set: CI must run it.
+Needs Playwright (pip install playwright: it has no rosdep key) and Debian's `chromium` package
+(or CHROMIUM=/path/to/chromium). Without either, the test is skipped with the reason on a
+developer's PC or in `colcon test`, and fails when CI=true: CI must run it.
 """
 
 import base64
@@ -25,15 +26,28 @@ import shutil
 
 import cv2
 import numpy as np
-from playwright.sync_api import sync_playwright
 from py_vision.synthetic_camera import read_frame_index
 import pytest
 from ros_harness import wait_until
+
+try:
+    from playwright.sync_api import sync_playwright
+except ImportError:
+    sync_playwright = None
 
 CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic',
                  '--no-first-run', '--disable-background-networking',
                  '--disable-component-update', '--disable-sync']
 URL_LINE = r'viewer at (http://[^\s/]+:\d+/)'
+
+
+def missing_browser():
+    """Return what this machine lacks to run the test (None when it has everything)."""
+    if sync_playwright is None:
+        return 'Playwright is not installed (pip install playwright)'
+    if chromium_path() is None:
+        return 'Chromium is not installed (apt-get install chromium)'
+    return None
 
 
 def chromium_path():
@@ -47,11 +61,12 @@ def chromium_path():
 @pytest.fixture
 def browser(tmp_path):
     """Yield a fresh headless Chromium context (with its own profile directory)."""
+    missing = missing_browser()
+    if missing:
+        if os.environ.get('CI', '').lower() in ('1', 'true', 'yes'):
+            pytest.fail('%s, and CI requires the browser test' % missing)
+        pytest.skip('%s; CI runs this test' % missing)
     path = chromium_path()
-    if path is None:
-        if os.environ.get('CI'):
-            pytest.fail('Chromium is missing and CI is set: install it (apt-get install chromium)')
-        pytest.skip('Chromium is not installed (apt-get install chromium); CI runs this test')
     with sync_playwright() as playwright:
         context = playwright.chromium.launch_persistent_context(
             str(tmp_path / 'profile'), executable_path=path, headless=True, args=CHROMIUM_ARGS,

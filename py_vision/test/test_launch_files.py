@@ -1,0 +1,158 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The installed launch files, read as Python source (the test runs without ROS's launch tools).
+
+A real `ros2 launch` was tried by hand (docs/ros.md); here each file must parse, start only
+installed py_vision executables with the shipped parameter file, and declare the arguments the
+documentation promises, typed as the parameters in config/params.yaml.
+"""
+
+import ast
+
+import pytest
+import ros_harness
+import yaml
+
+LAUNCH_DIR = ros_harness.SHARE / 'launch'
+CAMERA_ARGUMENTS = {'params_file', 'video_device', 'image_width', 'image_height', 'framerate',
+                    'pixel_format'}
+PROMISED = {
+    'camera.launch.py': {'executables': {'usbcam_publisher'}, 'arguments': CAMERA_ARGUMENTS},
+    'pipeline.launch.py': {'executables': {'usbcam_publisher', 'cv_bridge_test',
+                                           'usbcam_subscriber'},
+                           'arguments': CAMERA_ARGUMENTS | {'display'}},
+}
+
+
+def call_name(node):
+    """Return the called function's name of an ast.Call, or None."""
+    func = node.func
+    return func.id if isinstance(func, ast.Name) else getattr(func, 'attr', None)
+
+
+def calls(tree, name):
+    return [node for node in ast.walk(tree) if isinstance(node, ast.Call) and
+            call_name(node) == name]
+
+
+def keyword(call, name):
+    return next((kw.value for kw in call.keywords if kw.arg == name), None)
+
+
+def share_path(node):
+    """Return the installed path of PathJoinSubstitution([FindPackageShare('py_vision'), ...])."""
+    parts = node.args[0].elts
+    assert call_name(parts[0]) == 'FindPackageShare'
+    assert ast.literal_eval(parts[0].args[0]) == 'py_vision'
+    return ros_harness.SHARE.joinpath(*(ast.literal_eval(part) for part in parts[1:]))
+
+
+class LaunchFile:
+    """What a launch file starts, declares and includes, read from its syntax tree."""
+
+    def __init__(self, name):
+        self.path = LAUNCH_DIR / name
+        self.tree = ast.parse(self.path.read_text(), str(self.path))
+        self.nodes = calls(self.tree, 'Node')
+        self.includes = [share_path(call.args[0].args[0])
+                         for call in calls(self.tree, 'IncludeLaunchDescription')]
+        # Module-level tables of arguments: NAME = {argument: (type, description)}.
+        self.tables = {
+            stmt.targets[0].id: stmt.value for stmt in self.tree.body
+            if isinstance(stmt, ast.Assign) and isinstance(stmt.value, ast.Dict)}
+
+    def functions(self):
+        return {stmt.name for stmt in self.tree.body if isinstance(stmt, ast.FunctionDef)}
+
+    def declared(self):
+        """Return {argument name: type name or None} of every DeclareLaunchArgument."""
+        found = {}
+        for call in calls(self.tree, 'DeclareLaunchArgument'):
+            if isinstance(call.args[0], ast.Constant):
+                found[call.args[0].value] = None
+        for comprehension in ast.walk(self.tree):
+            if isinstance(comprehension, ast.ListComp) and \
+                    call_name(comprehension.elt) == 'DeclareLaunchArgument':
+                table = self.tables[comprehension.generators[0].iter.func.value.id]
+                for key, value in zip(table.keys, table.values):
+                    found[key.value] = value.elts[0].id
+        return found
+
+    def all_executables(self):
+        own = {ast.literal_eval(keyword(node, 'executable')) for node in self.nodes}
+        for include in self.includes:
+            own |= LaunchFile(include.name).all_executables()
+        return own
+
+    def all_arguments(self):
+        arguments = set(self.declared())
+        for include in self.includes:
+            arguments |= LaunchFile(include.name).all_arguments()
+        return arguments
+
+
+def test_the_launch_files_are_installed():
+    assert sorted(path.name for path in LAUNCH_DIR.iterdir()) == sorted(PROMISED)
+
+
+@pytest.mark.parametrize('name', sorted(PROMISED))
+def test_a_launch_file_starts_installed_nodes_with_the_shipped_parameters(name):
+    launch_file = LaunchFile(name)
+    assert 'generate_launch_description' in launch_file.functions()
+    installed = {path.name for path in ros_harness.EXECUTABLES.iterdir()}
+    for node in launch_file.nodes:
+        assert ast.literal_eval(keyword(node, 'package')) == 'py_vision'
+        assert ast.literal_eval(keyword(node, 'executable')) in installed
+        # The node name stays the executable's, so that params.yaml's section applies.
+        assert keyword(node, 'name') is None
+        first = keyword(node, 'parameters').elts[0]
+        assert call_name(first) == 'LaunchConfiguration'
+        assert ast.literal_eval(first.args[0]) == 'params_file'
+    assert launch_file.all_executables() == PROMISED[name]['executables']
+    for include in launch_file.includes:
+        assert include.is_file(), '%s includes %s, which is not installed' % (name, include)
+    defaults = [share_path(keyword(call, 'default_value'))
+                for call in calls(launch_file.tree, 'DeclareLaunchArgument')
+                if isinstance(call.args[0], ast.Constant) and call.args[0].value == 'params_file']
+    assert defaults == [ros_harness.SHARE / 'config' / 'params.yaml']
+    assert defaults[0].is_file()
+
+
+@pytest.mark.parametrize('name', sorted(PROMISED))
+def test_a_launch_file_declares_the_promised_arguments(name):
+    assert LaunchFile(name).all_arguments() == PROMISED[name]['arguments']
+
+
+def test_camera_arguments_reach_the_node_typed_as_its_parameters():
+    # video_device:=0 must stay the string '0' (a camera index), framerate:=15 be 15.0.
+    published = yaml.safe_load((ros_harness.SHARE / 'config' / 'params.yaml').read_text())[
+        'usbcam_publisher']['ros__parameters']
+    in_file = {name: type(value).__name__ for name, value in published.items()}
+    typed = LaunchFile('camera.launch.py').declared()
+    for argument, kind in typed.items():
+        if argument in in_file:
+            assert kind == in_file[argument], argument
+    assert typed['video_device'] == 'str'
+    assert typed['pixel_format'] == 'str'
+
+
+def test_the_pipeline_viewer_watches_the_processed_topic():
+    launch_file = LaunchFile('pipeline.launch.py')
+    viewer = [node for node in launch_file.nodes
+              if ast.literal_eval(keyword(node, 'executable')) == 'usbcam_subscriber']
+    assert len(viewer) == 1
+    assert ast.literal_eval(keyword(viewer[0], 'remappings')) == [
+        ('usb_camera/image', 'cv_bridge_image')]
