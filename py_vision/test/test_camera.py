@@ -144,6 +144,7 @@ def test_controls_change_the_picture_in_the_expected_direction(fmt):
     b, g, r = mean_bgr(camera)
     assert b - r > (base[0] - base[2]) + 10
     camera.set_control('auto_white_balance', True)
+
     def luma_spread():
         return cv2.cvtColor(camera.read().bgr(), cv2.COLOR_BGR2GRAY).astype(float).std()
     contrast_base = luma_spread()

@@ -21,12 +21,12 @@ import urllib.request
 
 import cv2
 import numpy as np
+from param_client import set_parameter
 from py_vision.synthetic_camera import read_frame_index
 import pytest
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_harness import wait_until
 from sensor_msgs.msg import Image
-from test_faults import set_parameter
 from test_web_browser import browser  # noqa: F401 (the headless Chromium fixture)
 
 RED = (0, 0, 255)  # BGR
@@ -246,7 +246,7 @@ def test_simulated_work_can_be_changed_while_running(launch, peer):
     node = launch('cv_bridge_test')
     launch('usbcam_publisher', params=dict(CAMERA, framerate=10.0))
     wait_until(lambda: received, 30.0, interval=0.1, what='a processed frame')
-    result = set_parameter(peer, 'cv_bridge_test', 'simulated_work_ms', 300)
+    result = set_parameter(peer, 'cv_bridge_test', 'simulated_work_ms', 300.0)
     assert result.successful, result.reason
     node.wait_for_output('simulated work is now 300 ms a frame')
 
@@ -254,7 +254,7 @@ def test_simulated_work_can_be_changed_while_running(launch, peer):
         # Once the 5 s window holds only slow steps, the busy 300 ms show in the median.
         return any(float(m.group(4)) >= 300.0 for m in STATS_LINE.finditer(node.output()))
     wait_until(slow_steps_reported, 30.0, interval=0.2, what='processing p50 >= 300 ms')
-    refused = set_parameter(peer, 'cv_bridge_test', 'simulated_work_ms', 20000)
+    refused = set_parameter(peer, 'cv_bridge_test', 'simulated_work_ms', 20000.0)
     assert not refused.successful and '0..10000' in refused.reason
     assert node.stop(signal.SIGINT) == 0
 

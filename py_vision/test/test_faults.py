@@ -28,9 +28,9 @@ import time
 
 import cv2
 import numpy as np
+from param_client import set_parameter
 from py_vision.synthetic_camera import read_frame_index, synthetic_frame
 import pytest
-from param_client import set_parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 import ros_harness
 from ros_harness import wait_until
