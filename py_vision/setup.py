@@ -13,10 +13,53 @@
 # limitations under the License.
 
 from glob import glob
+import os
 
 from setuptools import find_packages, setup
+from setuptools.command.install_scripts import install_scripts
 
 package_name = 'py_vision'
+executables = {
+    'usbcam_publisher': 'py_vision.usbcam_publisher',
+    'usbcam_subscriber': 'py_vision.usbcam_subscriber',
+    'cv_bridge_test': 'py_vision.cv_bridge_test',
+}
+
+LAUNCHER = """{shebang}# {name}: the py_vision executable `ros2 run py_vision {name}` starts.
+import sys
+
+try:
+    from {module} import main
+except ImportError as error:
+    sys.stderr.write(
+        '{name}: cannot start: %s. Source your ROS 2 installation and this workspace first: '
+        'source install/setup.bash (on the board: source /usr/bin/ros_setup.sh)\\n' % error)
+    sys.exit(1)
+sys.exit(main())
+"""
+
+
+class InstallLaunchers(install_scripts):
+    """
+    Install each executable as a short launcher instead of setuptools' entry-point script.
+
+    setuptools' script looks the package up through importlib.metadata, which without a
+    sourced workspace ends in a 20-line PackageNotFoundError traceback; the launcher imports
+    the node's module directly and, when it cannot, says in one line what to source.
+    """
+
+    def run(self):
+        super().run()
+        for path in self.get_outputs():
+            name = os.path.basename(path)
+            if name not in executables:
+                continue
+            with open(path) as script:
+                shebang = script.readline()
+            with open(path, 'w') as script:
+                script.write(LAUNCHER.format(shebang=shebang, name=name,
+                                             module=executables[name]))
+
 
 setup(
     name=package_name,
@@ -36,10 +79,7 @@ setup(
     license='Apache-2.0',
     tests_require=['pytest'],
     entry_points={
-        'console_scripts': [
-            'usbcam_publisher = py_vision.usbcam_publisher:main',
-            'usbcam_subscriber = py_vision.usbcam_subscriber:main',
-            'cv_bridge_test = py_vision.cv_bridge_test:main',
-        ],
+        'console_scripts': ['%s = %s:main' % item for item in executables.items()],
     },
+    cmdclass={'install_scripts': InstallLaunchers},
 )

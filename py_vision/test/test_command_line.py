@@ -14,16 +14,19 @@
 
 """The executables as a ROS user types them: --help, bad arguments, typed parameters, signals."""
 
+import os
 from pathlib import Path
 import random
 import re
 import signal
+import subprocess
 import time
 
 from param_client import describe_parameters, get_parameters
 import pytest
 from rcl_interfaces.msg import ParameterType
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+import ros_harness
 from ros_harness import wait_until
 from sensor_msgs.msg import Image
 
@@ -181,3 +184,15 @@ def test_a_second_sigint_does_not_cut_the_clean_up_short(launch, peer, executabl
         assert status == 0 and 'Traceback' not in out, out
         if executable in STOPPED:
             assert STOPPED[executable] in out.splitlines()[-1], out
+
+
+@pytest.mark.parametrize('executable', EXECUTABLES)
+def test_without_a_sourced_workspace_it_says_what_to_source(executable):
+    # What a user gets who forgot `source install/setup.bash`: no PYTHONPATH, no ament index.
+    env = {'PATH': os.environ.get('PATH', '/usr/bin:/bin'), 'HOME': os.environ.get('HOME', '/')}
+    done = subprocess.run([str(ros_harness.EXECUTABLES / executable)], env=env,
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 1
+    lines = done.stderr.splitlines()
+    assert len(lines) == 1 and 'source install/setup.bash' in lines[0], done.stderr
+    assert lines[0].startswith('%s: cannot start' % executable)
