@@ -27,6 +27,7 @@ user set are applied again. The node is a thin adapter: the camera itself is cam
 import threading
 import time
 
+import cv2
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
 from py_vision.camera import Camera, CONTROL_NAMES, PIXEL_FORMATS, SourceError
 from py_vision.cv_bridge import CvBridge
@@ -107,6 +108,10 @@ class USBImagePublisher(Node):
 
     def __init__(self):
         super().__init__(self.NODE_NAME)
+        # One conversion or decode per frame gains nothing from OpenCV's worker threads,
+        # which spin after every parallel call: one thread halves the capture's CPU
+        # (bench/bench_transport.py).
+        cv2.setNumThreads(1)
         self._log_name = self.get_logger().name
         self._stop = threading.Event()
         self._camera_lock = threading.Lock()
