@@ -152,9 +152,9 @@ def _encoding(name):
         raise CvBridgeError('Unrecognized image encoding [%s]' % (name,))
     channels = int(match.group(2) or 1)
     if channels > _CN_MAX:
-        raise CvBridgeError('Image encoding [%s] has %d channels, OpenCV allows at most %d'
-                            % (name, channels, _CN_MAX))
-    # Only valid names are kept, so the table stays bounded (7 depths x 512 channels, 2 forms).
+        raise CvBridgeError('Unrecognized image encoding [%s]: %d channels, OpenCV allows at '
+                            'most %d' % (name, channels, _CN_MAX))
+    # Only valid names are kept, so the table stays bounded (7 depths by 512 channel counts).
     enc = _ENCODINGS[name] = _Encoding(name, match.group(1), channels, None)
     return enc
 
@@ -257,7 +257,15 @@ def _convert_to(im, dtype, alpha=1.0, beta=0.0):
             return _saturate_int(im, dtype)
         return _round_to_int(im, dtype)
     if beta == 0.0 and im.dtype.kind != 'f' and dtype.kind != 'f':
-        # The 8/16-bit scalings of cv_bridge, exact in integers and several times faster.
+        if alpha > 0.0 and im.dtype in (np.uint8, np.uint16) and dtype == np.uint8:
+            # Nothing is negative here, so OpenCV's convertScaleAbs is convertTo (the same float
+            # arithmetic), in C: mono16 to mono8 in a fraction of numpy's time.
+            return cv2.convertScaleAbs(im, alpha=alpha)
+        # The other 8/16-bit scalings of cv_bridge, exact in integers.
+        if alpha == _SCALE_8_TO_16 and im.dtype == np.uint8 and dtype == np.uint16:
+            out = im.astype(np.uint16)
+            out *= 257
+            return out
         if alpha == _SCALE_8_TO_16 and im.dtype.itemsize == 1 and dtype.itemsize == 2:
             return _saturate_int(im.astype(np.int32) * 257, dtype)
         if alpha == _SCALE_16_TO_8 and im.dtype.itemsize == 2 and dtype.itemsize == 1:
