@@ -285,6 +285,15 @@ def test_same_encoding_is_a_writable_view(desired):
     np.testing.assert_array_equal(BRIDGE.imgmsg_to_cv2(msg)[60, 60], [0, 0, 255])
 
 
+@pytest.mark.parametrize('src,dst', [('mono8', '8UC1'), ('8U', '8UC1'), ('yuv422', 'uyvy'),
+                                     ('bgra16', '16UC4')])
+def test_renaming_without_changing_pixels_is_a_view(src, dst):
+    msg = BRIDGE.cv2_to_imgmsg(random_image(src if src in ALL else src + 'C1', 10, 12), src)
+    out = BRIDGE.imgmsg_to_cv2(msg, dst)
+    assert np.shares_memory(out, np.frombuffer(msg.data, np.uint8))
+    np.testing.assert_array_equal(out, BRIDGE.imgmsg_to_cv2(msg))
+
+
 @pytest.mark.parametrize('kind', ['bytes', 'bytearray', 'list', 'memoryview', 'numpy'])
 @pytest.mark.parametrize('encoding', ['bgr8', 'mono16', '32FC1'])
 def test_other_data_containers(kind, encoding):
