@@ -192,7 +192,7 @@ def _plan(src, dst):
     return plan
 
 
-# cv::Mat::convertTo skips the arithmetic when |alpha - 1| and |beta| are below DBL_EPSILON.
+# cv::Mat::convertTo skips the scaling when |alpha - 1| is below DBL_EPSILON.
 _DBL_EPSILON = np.finfo(np.float64).eps
 
 
@@ -237,16 +237,15 @@ def _saturate_int(im, dtype):
     return im.astype(dtype)
 
 
-def _convert_to(im, dtype, alpha=1.0, beta=0.0):
+def _convert_to(im, dtype, alpha=1.0):
     """
-    Return im converted to dtype exactly as cv::Mat::convertTo(dst, depth, alpha, beta) on x86.
+    Return im converted to dtype exactly as cv::Mat::convertTo(dst, depth, alpha) on x86.
 
     Scaled values are computed in OpenCV's work type (_work_dtype), rounded to nearest and
     saturated (_round_to_int); without scaling, integers saturate and floats round the same way.
-    The bridge never passes both alpha and beta, where OpenCV may fuse the multiply-add.
     """
     dtype = np.dtype(dtype)
-    if abs(alpha - 1.0) < _DBL_EPSILON and abs(beta) < _DBL_EPSILON:
+    if abs(alpha - 1.0) < _DBL_EPSILON:
         if im.dtype == dtype:
             return im
         if dtype.kind == 'f':
@@ -256,7 +255,7 @@ def _convert_to(im, dtype, alpha=1.0, beta=0.0):
         if im.dtype.kind != 'f':
             return _saturate_int(im, dtype)
         return _round_to_int(im, dtype)
-    if beta == 0.0 and im.dtype.kind != 'f' and dtype.kind != 'f':
+    if im.dtype.kind != 'f' and dtype.kind != 'f':
         if alpha > 0.0 and im.dtype in (np.uint8, np.uint16) and dtype == np.uint8:
             # Nothing is negative here, so OpenCV's convertScaleAbs is convertTo (the same float
             # arithmetic), in C: mono16 to mono8 in a fraction of numpy's time.
@@ -274,13 +273,28 @@ def _convert_to(im, dtype, alpha=1.0, beta=0.0):
     work_dtype = _work_dtype(im.dtype, dtype)
     with np.errstate(over='ignore', invalid='ignore'):
         work = im.astype(work_dtype)
-        if alpha != 1.0:
-            work *= work_dtype.type(alpha)
-        if beta != 0.0:
-            work += work_dtype.type(beta)
+        work *= work_dtype.type(alpha)
         if dtype.kind == 'f':
             return work.astype(dtype)
     return _round_to_int(work, dtype)
+
+
+def _add_scalar(im, value):
+    """
+    Return im + value in im's dtype, as cv::add(im, Scalar(value)) computes it on x86.
+
+    For an integer image OpenCV rounds the scalar to int32 and adds in int32 (wrapping
+    around), then saturates to the image's type; a float image adds in its own precision.
+    """
+    if im.dtype.kind == 'f':
+        with np.errstate(over='ignore'):
+            return im + im.dtype.type(value)
+    offset = int(_round_to_int(np.array([value], np.float64), np.dtype(np.int32))[0])
+    if im.itemsize <= 2 and abs(offset) < 2 ** 30:
+        # Nothing can wrap around: int32 is enough, and faster.
+        return _saturate_int(im.astype(np.int32) + offset, im.dtype)
+    total = im.astype(np.int64) + offset
+    return _saturate_int((total + 2 ** 31) % 2 ** 32 - 2 ** 31, im.dtype)
 
 
 def _convert(im, src, dst):
@@ -653,8 +667,9 @@ def cvtColorForDisplay(source, encoding_in='', encoding_out='', do_dynamic_scali
         if src.channels != 1:
             raise CvBridgeError('cvtColorForDisplay: scaling is only supported for one-channel '
                                 'images, [%s] has %d' % (src.name, src.channels))
-        # Upstream's two conversions: minus min in the source type, then scaled to 8 bits.
-        shifted = _convert_to(source, source.dtype, 1.0, -float(min_image_value))
+        # Upstream's cv::Mat(image - min).convertTo(8-bit, 255 / (max - min)): the
+        # expression is evaluated as cv::add(image, Scalar(-min)).
+        shifted = _add_scalar(source, -float(min_image_value))
         scaled = _convert_to(shifted, np.uint8,
                              255.0 / (float(max_image_value) - float(min_image_value)))
         if colormap != -1:

@@ -17,8 +17,8 @@
 Depth conversions of py_vision.cv_bridge against OpenCV's own cv::Mat::convertTo.
 
 Upstream cv_bridge changes depth with ``convertTo(dst, depth, scale)``: 65535/255 from 8 to 16
-bits, 255/65535 from 16 to 8, 1 otherwise; ``cvtColorForDisplay`` shifts by the minimum and
-scales to 8 bits the same way. OpenCV's Python module has no ``convertTo`` (``cv2.Mat`` is a
+bits, 255/65535 from 16 to 8, 1 otherwise; ``cvtColorForDisplay`` subtracts the minimum
+(``cv::add`` with a scalar) and scales to 8 bits the same way. OpenCV's Python module has no ``convertTo`` (``cv2.Mat`` is a
 plain ndarray subclass, ``cv2.UMat`` has no such method, ``cv2.convertScaleAbs`` takes the
 absolute value), so the reference is ``cv2.normalize`` with ``NORM_INF``: OpenCV implements it
 as one ``src.convertTo(dst, dtype, alpha / norm(src), 0)``. Appending a calibration element of
@@ -213,18 +213,18 @@ def test_named_encodings_to_generic_depths(encoding, channels, dst):
 
 @st.composite
 def display_cases(draw):
-    """Draw a one-channel image and a min < max range, with values where references are exact."""
+    """Draw a one-channel image of any depth and a min < max range to show it with."""
     depth = draw(st.sampled_from(sorted(DEPTHS)))
     dtype = np.dtype(DEPTHS[depth])
     if dtype.kind == 'f':
-        # float32-exact bounds, and magnitudes where v - min has one rounding either way.
-        elements = st.floats(-1e6, 1e6, width=32)
-        bound = st.floats(-1e6, 1e6, width=32)
+        elements = st.floats(-1e6, 1e6, width=dtype.itemsize * 8)
+        bound = st.floats(-1e6, 1e6)
     else:
-        # In 32S, image - min stays within int32: OpenCV's subtraction saturates where the
-        # expression's convertTo would give INT_MIN.
-        smallest = max(np.iinfo(dtype).min, -2 ** 30)
-        elements = bound = st.integers(smallest, min(np.iinfo(dtype).max, 2 ** 30))
+        # In 32S, image - min stays away from INT_MIN, on which OpenCV 4.6's norm (the
+        # reference's calibration) overflows.
+        smallest, largest = max(np.iinfo(dtype).min, -2 ** 29), min(np.iinfo(dtype).max, 2 ** 29)
+        elements = st.integers(smallest, largest)
+        bound = st.one_of(st.integers(smallest, largest), st.floats(smallest, largest))
     im = draw(hnp.arrays(dtype, (draw(st.integers(1, 6)), draw(st.integers(1, 9))),
                          elements=elements))
     low, high = draw(bound), draw(bound)
@@ -232,14 +232,20 @@ def display_cases(draw):
     return depth, im, float(low), float(high)
 
 
+def cv_add_scalar(im, value):
+    """Return cv2.add(im, value) with value taken as a scalar, in the image's type."""
+    # A (1, n > 4) row: OpenCV cannot mistake a Python number for an array of its size.
+    flat = np.append(im.ravel(), np.zeros(5, im.dtype)).reshape(1, -1)
+    return cv2.add(flat, value)[0, :im.size].reshape(im.shape)
+
+
 @SETTINGS
 @given(display_cases())
 def test_display_scaling_converts_as_opencv(case):
     depth, im, low, high = case
-    # Upstream: cv::Mat(image - min).convertTo(CV_8U, 255 / (max - min)); with these values
-    # cv2.subtract, in the image's type, gives image - min exactly as the expression does.
-    shifted = cv2.subtract(im, np.full_like(im, low))
-    expected = cv_convert_to(shifted, '8U', 255.0 / (high - low))
+    # Upstream: cv::Mat(image - min).convertTo(CV_8U, 255 / (max - min)), where OpenCV
+    # evaluates image - min as cv::add(image, Scalar(-min)).
+    expected = cv_convert_to(cv_add_scalar(im, -low), '8U', 255.0 / (high - low))
     out = cvtColorForDisplay(im, '%sC1' % depth, 'mono8', False, low, high)
     assert_same(out, expected)
 
