@@ -18,16 +18,18 @@ Depth conversions of py_vision.cv_bridge against OpenCV's own cv::Mat::convertTo
 
 Upstream cv_bridge changes depth with ``convertTo(dst, depth, scale)``: 65535/255 from 8 to 16
 bits, 255/65535 from 16 to 8, 1 otherwise; ``cvtColorForDisplay`` subtracts the minimum
-(``cv::add`` with a scalar) and scales to 8 bits the same way. OpenCV's Python module has no ``convertTo`` (``cv2.Mat`` is a
-plain ndarray subclass, ``cv2.UMat`` has no such method, ``cv2.convertScaleAbs`` takes the
-absolute value), so the reference is ``cv2.normalize`` with ``NORM_INF``: OpenCV implements it
-as one ``src.convertTo(dst, dtype, alpha / norm(src), 0)``. Appending a calibration element of
-known norm and choosing ``alpha`` so that ``alpha / norm`` is exactly the scale makes it that
-very ``convertTo`` call. With an infinity in the image the norm is infinite, and with a NaN
-OpenCV 4.6 may find a NaN norm, so there the reference is ``cv2.add(src, -0.0, dtype=...)``,
-which converts each element with the same functions (scale is always 1 for float sources):
-test_add_with_dtype_agrees_with_convert_to checks that on every depth pair. The
-expectations are x86's (NaN, infinities and values beyond int32 become INT_MIN, then saturate).
+(``cv::add`` with a scalar) and scales to 8 bits the same way.
+
+OpenCV's Python module has no ``convertTo``: ``cv2.Mat`` is a plain ndarray subclass,
+``cv2.UMat`` has no such method, and ``cv2.convertScaleAbs`` takes the absolute value. So the
+reference is ``cv2.normalize`` with ``NORM_INF``, which OpenCV implements (4.6 and 5.0 alike) as
+one ``src.convertTo(dst, dtype, alpha / norm(src), 0)`` call. Appending a calibration element
+of known norm and choosing ``alpha`` so that ``alpha / norm`` is exactly the scale makes it
+that very ``convertTo``. With an infinity in the image the norm is infinite, and with a NaN
+OpenCV 4.6 may find a NaN norm; there (float sources, whose scale is always 1) the reference is
+``cv2.add(src, -0.0, dtype=...)``, which converts each element with the same functions:
+test_add_with_dtype_agrees_with_convert_to checks that on every depth pair. The expectations
+are x86's: NaN, infinities and values beyond int32 become INT_MIN, which then saturates.
 """
 
 import math
