@@ -92,6 +92,9 @@ def main():
     for width, height in SIZES:
         frame = np.random.default_rng(0).integers(0, 256, (height, width, 3), np.uint8)
         msg = bridge.cv2_to_imgmsg(frame, 'bgr8', header=header)
+        # A 16-bit camera's frame (depth, thermal): scaling to 8 bits rounds as convertTo does.
+        deep = np.random.default_rng(1).integers(0, 65536, (height, width), np.uint16)
+        mono16 = bridge.cv2_to_imgmsg(deep, 'mono16', header=header)
         cases = {
             'numpy copy (reference)': frame.copy,
             'upstream fill: frombytes(tobytes())': lambda: upstream_fill(frame),
@@ -99,6 +102,7 @@ def main():
             'imgmsg_to_cv2 passthrough': lambda: bridge.imgmsg_to_cv2(msg),
             'imgmsg_to_cv2 bgr8 from bgr8': lambda: bridge.imgmsg_to_cv2(msg, 'bgr8'),
             'imgmsg_to_cv2 rgb8 from bgr8': lambda: bridge.imgmsg_to_cv2(msg, 'rgb8'),
+            'imgmsg_to_cv2 mono8 from mono16': lambda: bridge.imgmsg_to_cv2(mono16, 'mono8'),
         }
         for name, (seconds, ratio) in measure(cases).items():
             rows.append({'size': '%dx%d' % (width, height), 'case': name,

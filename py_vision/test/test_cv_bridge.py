@@ -111,7 +111,56 @@ def test_every_encoding_has_its_opencv_type(encoding):
         cv_type_name(encoding)
 
 
-@pytest.mark.parametrize('encoding', ['', 'BGR8', 'bgr 8', '8UC5', '16FC1', 'nv12', None])
+@pytest.mark.parametrize('channels', [1, 2, 3, 4, 5, 6, 7, 8, 100, 512])
+@pytest.mark.parametrize('depth', sorted(DEPTHS))
+def test_any_channel_count_has_its_opencv_type(depth, channels):
+    name = '%sC%d' % (depth, channels)
+    # OpenCV's own type number: CV_MAKETYPE, written out from its constants (OpenCV 4's Python
+    # module has no CV_MAKETYPE, and OpenCV 5 moved the channel bits).
+    shift = (cv2.CV_8UC2 - cv2.CV_8UC1).bit_length() - 1
+    expected = getattr(cv2, 'CV_' + depth) + ((channels - 1) << shift)
+    if hasattr(cv2, 'CV_MAKETYPE'):
+        assert cv2.CV_MAKETYPE(getattr(cv2, 'CV_' + depth), channels) == expected
+    assert getCvType(name) == expected
+    assert BRIDGE.encoding_to_dtype_with_channels(name) == (DEPTHS[depth], channels)
+    assert BRIDGE.cvtype2_to_dtype_with_channels(expected) == (DEPTHS[depth], channels)
+    assert BRIDGE.dtype_with_channels_to_cvtype2(np.dtype(DEPTHS[depth]), channels) == name
+
+
+@pytest.mark.parametrize('depth', sorted(DEPTHS))
+def test_bare_depth_is_one_channel(depth):
+    assert getCvType(depth) == getattr(cv2, 'CV_%sC1' % depth)
+    assert BRIDGE.encoding_to_dtype_with_channels(depth) == (DEPTHS[depth], 1)
+    im = random_image('%sC1' % depth)
+    msg = BRIDGE.cv2_to_imgmsg(im, depth)
+    assert msg.encoding == depth and msg.step == 8 * im.itemsize
+    np.testing.assert_array_equal(BRIDGE.imgmsg_to_cv2(msg), im)
+    np.testing.assert_array_equal(BRIDGE.imgmsg_to_cv2(msg, '%sC1' % depth), im)
+    with pytest.raises(CvBridgeError, match='incompatible type'):
+        BRIDGE.cv2_to_imgmsg(np.dstack([im, im]), depth)
+
+
+@pytest.mark.parametrize('channels', [5, 6, 7, 8, 33, 512])
+def test_many_channels_round_trip_and_convert(channels):
+    im = np.random.default_rng(channels).integers(0, 65536, (6, 7, channels), np.uint16)
+    msg = BRIDGE.cv2_to_imgmsg(im)
+    assert msg.encoding == '16UC%d' % channels and msg.step == 7 * channels * 2
+    np.testing.assert_array_equal(BRIDGE.imgmsg_to_cv2(msg), im)
+    padded = make_msg(im, '16UC%d' % channels, pad=6, bigendian=True)
+    np.testing.assert_array_equal(BRIDGE.imgmsg_to_cv2(padded), im)
+    narrow = BRIDGE.imgmsg_to_cv2(msg, '8UC%d' % channels)
+    np.testing.assert_array_equal(narrow, np.round(im / 257.0).astype(np.uint8))
+    floats = BRIDGE.imgmsg_to_cv2(msg, '32FC%d' % channels)
+    np.testing.assert_array_equal(floats, im.astype(np.float32))
+    with pytest.raises(CvBridgeError, match='same number of channels'):
+        BRIDGE.imgmsg_to_cv2(msg, '8UC%d' % (channels - 1))
+    with pytest.raises(CvBridgeError, match='not a color format'):
+        BRIDGE.imgmsg_to_cv2(msg, 'bgr8')
+
+
+@pytest.mark.parametrize('encoding', ['', 'BGR8', 'bgr 8', '16FC1', 'nv12', None, '8UC0',
+                                      '8UC513', '8UC', '8uc3', '8UC03', ' 8UC3', '8UC3 ',
+                                      '8UC-1', 'C3', '8'])
 def test_unknown_encoding_is_named_in_the_error(encoding):
     with pytest.raises(CvBridgeError, match='Unrecognized image encoding'):
         getCvType(encoding)
@@ -122,10 +171,13 @@ def test_unknown_encoding_is_named_in_the_error(encoding):
 def test_helpers_reject_what_has_no_type():
     with pytest.raises(CvBridgeError):
         BRIDGE.dtype_with_channels_to_cvtype2(np.dtype('int64'), 1)
-    with pytest.raises(CvBridgeError):
-        BRIDGE.dtype_with_channels_to_cvtype2(np.dtype('uint8'), 7)
-    with pytest.raises(CvBridgeError):
-        BRIDGE.cvtype2_to_dtype_with_channels(-5)
+    for channels in (0, 513, 2.0, '3'):
+        with pytest.raises(CvBridgeError):
+            BRIDGE.dtype_with_channels_to_cvtype2(np.dtype('uint8'), channels)
+    shift = (cv2.CV_8UC2 - cv2.CV_8UC1).bit_length() - 1
+    for cvtype in (-5, 512 << shift, 7, 'CV_8UC1', None):
+        with pytest.raises(CvBridgeError):
+            BRIDGE.cvtype2_to_dtype_with_channels(cvtype)
 
 
 # --- round trips and layouts ----------------------------------------------------------
@@ -231,6 +283,15 @@ def test_same_encoding_is_a_writable_view(desired):
     assert np.shares_memory(out, np.frombuffer(msg.data, np.uint8))
     cv2.circle(out, (60, 60), 30, (0, 0, 255), -1)
     np.testing.assert_array_equal(BRIDGE.imgmsg_to_cv2(msg)[60, 60], [0, 0, 255])
+
+
+@pytest.mark.parametrize('src,dst', [('mono8', '8UC1'), ('8U', '8UC1'), ('yuv422', 'uyvy'),
+                                     ('bgra16', '16UC4')])
+def test_renaming_without_changing_pixels_is_a_view(src, dst):
+    msg = BRIDGE.cv2_to_imgmsg(random_image(src if src in ALL else src + 'C1', 10, 12), src)
+    out = BRIDGE.imgmsg_to_cv2(msg, dst)
+    assert np.shares_memory(out, np.frombuffer(msg.data, np.uint8))
+    np.testing.assert_array_equal(out, BRIDGE.imgmsg_to_cv2(msg))
 
 
 @pytest.mark.parametrize('kind', ['bytes', 'bytearray', 'list', 'memoryview', 'numpy'])
@@ -392,7 +453,9 @@ def test_malformed_messages(msg, words):
     (np.zeros((4, 4), np.int64), 'passthrough', 'numpy type int64'),
     (np.zeros((4, 4), np.float16), 'passthrough', 'float16'),
     (np.zeros((4, 4), np.complex64), 'passthrough', 'complex64'),
-    (np.zeros((4, 4, 5), np.uint8), 'passthrough', '5 channels'),
+    (np.zeros((4, 4, 513), np.uint8), 'passthrough', '513 channels'),
+    (np.zeros((4, 4, 0), np.uint8), 'passthrough', '0 channels'),
+    (np.zeros((4, 4, 5), np.uint8), 'bgr8', 'incompatible type 8UC5'),
     (np.zeros((4, 4, 3, 1), np.uint8), 'passthrough', 'shape'),
     (np.zeros(4, np.uint8), 'passthrough', 'shape'),
     (np.zeros((0, 4, 3), np.uint8), 'passthrough', 'empty'),
@@ -407,11 +470,18 @@ def test_arrays_without_an_encoding(cvim, encoding, words):
         BRIDGE.cv2_to_imgmsg(cvim, encoding)
 
 
-def test_odd_width_yuv_conversion_is_a_bridge_error():
-    msg = BRIDGE.cv2_to_imgmsg(np.zeros((4, 5, 2), np.uint8), 'yuv422')
-    assert BRIDGE.imgmsg_to_cv2(msg).shape == (4, 5, 2)
-    with pytest.raises(CvBridgeError, match='yuv422'):
-        BRIDGE.imgmsg_to_cv2(msg, 'bgr8')
+@pytest.mark.parametrize('encoding', sorted(YUV))
+def test_odd_width_yuv_conversion_is_a_bridge_error(encoding):
+    # 4:2:2 pixels come in pairs sharing U and V; OpenCV 4.6 converts an odd width anyway.
+    packed = random_image(encoding, 4, 5)
+    msg = BRIDGE.cv2_to_imgmsg(packed, encoding)
+    np.testing.assert_array_equal(BRIDGE.imgmsg_to_cv2(msg), packed)
+    for dst in sorted(PLAIN):
+        with pytest.raises(CvBridgeError, match=r'\[%s\].*even width.*5 pixels' % encoding):
+            BRIDGE.imgmsg_to_cv2(msg, dst)
+    for alias in sorted(YUV):
+        if ALL[alias][2] == ALL[encoding][2]:
+            np.testing.assert_array_equal(BRIDGE.imgmsg_to_cv2(msg, alias), packed)
 
 
 # --- compressed images -----------------------------------------------------------------------

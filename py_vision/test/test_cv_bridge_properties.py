@@ -32,7 +32,7 @@ DTYPES = ['uint8', 'int8', 'uint16', 'int16', 'int32', 'float32', 'float64']
 ENCODINGS = ['mono8', 'mono16', 'rgb8', 'bgr8', 'rgba8', 'bgra8', 'rgb16', 'bgr16', 'rgba16',
              'bgra16', 'bayer_rggb8', 'bayer_bggr16', 'bayer_gbrg8', 'bayer_grbg16', 'yuv422',
              'yuv422_yuy2', '8UC1', '8UC2', '8SC3', '16UC4', '16SC1', '32SC2', '32FC1', '32FC3',
-             '64FC1', '64FC4']
+             '64FC1', '64FC4', '8UC5', '16SC8', '32FC17', '8U', '64F']
 
 
 @st.composite
@@ -42,7 +42,7 @@ def images(draw):
     if dtype.itemsize > 1 and draw(st.booleans()):
         dtype = dtype.newbyteorder('>')
     height, width = draw(st.integers(1, 9)), draw(st.integers(1, 9))
-    channels = draw(st.sampled_from([None, 1, 2, 3, 4]))
+    channels = draw(st.sampled_from([None, 1, 2, 3, 4, 5, 8, 17]))
     shape = (height, width) if channels is None else (height, width, channels)
     im = draw(hnp.arrays(dtype, shape))
     layout = draw(st.sampled_from(['c', 'fortran', 'strided', 'reversed']))
