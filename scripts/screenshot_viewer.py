@@ -44,9 +44,11 @@ def main():
     if chromium is None:
         sys.exit('chromium is not installed (apt-get install chromium)')
     domain = ros_harness.DomainId()
+    # The nodes' rcl log files go to a directory of this run, deleted at its end.
+    log_dir = tempfile.mkdtemp(prefix='py_vision_screenshot_log_')
     env = ros_harness.installed_env()
     env.update(ROS_DOMAIN_ID=str(domain.value), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
-               PYTHONUNBUFFERED='1', RCUTILS_COLORIZED_OUTPUT='0')
+               PYTHONUNBUFFERED='1', RCUTILS_COLORIZED_OUTPUT='0', ROS_LOG_DIR=log_dir)
     nodes = [
         ros_harness.NodeProcess('usbcam_publisher', ros_harness.ros_args(
             {'video_device': 'synthetic', 'framerate': 15.0}), env),
@@ -75,6 +77,7 @@ def main():
             node.stop()
             node.kill()
         domain.release()
+        shutil.rmtree(log_dir, ignore_errors=True)
 
 
 if __name__ == '__main__':
