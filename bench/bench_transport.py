@@ -81,7 +81,7 @@ def cpu_ticks(pid):
 # ----------------------------------------------------------------------- helper processes
 
 def run_subscriber(kind, topic, out):
-    """A bare subscriber with ROS defaults (reliable, keep last 10) or best effort."""
+    """Run a bare subscriber: ROS defaults (reliable, keep last 10) or best effort."""
     import rclpy
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from rclpy.signals import SignalHandlerOptions
@@ -111,7 +111,7 @@ def run_subscriber(kind, topic, out):
 
 
 def run_reference(width, height, fps, out):
-    """A bare rclpy publisher of prebuilt JPEG frames (what the camera sends), paced."""
+    """Run a bare rclpy publisher of prebuilt JPEG frames (what the camera sends), paced."""
     import rclpy
     from rclpy.signals import SignalHandlerOptions
     from sensor_msgs.msg import CompressedImage
@@ -139,7 +139,7 @@ def run_reference(width, height, fps, out):
 
 
 def run_camera(width, height, fps, pixel_format, out):
-    """The synthetic camera alone, read as the publisher reads it: what the camera costs."""
+    """Read the synthetic camera alone, as the publisher does: what the camera costs."""
     from bench_common import StopFlag, write_json
     import cv2
     from py_vision.camera import Camera
@@ -196,7 +196,8 @@ class Case:
     def reference(self, width, height, fps):
         name = 'ref%d' % len(self.procs)
         return self.start(name, [sys.executable, __file__, '--role', 'ref', str(width),
-                                 str(height), str(fps), str(Path(self.workdir) / (name + '.json'))])
+                                 str(height), str(fps),
+                                 str(Path(self.workdir) / (name + '.json'))])
 
     def wait_log(self, proc, text, timeout=60.0):
         deadline = time.monotonic() + timeout
@@ -232,7 +233,7 @@ class Case:
 
 
 def counters(log):
-    """The publisher's last line: frames, raw, compressed, encoded, decoded."""
+    """Return what the publisher's last line counts: frames, raw, compressed, encoded, decoded."""
     match = re.search(r'after (\d+) frames \((\d+) raw, (\d+) compressed published; (\d+) '
                       r'JPEG encoded, (\d+) decoded\)', log)
     return [int(v) for v in match.groups()] if match else None
@@ -339,7 +340,7 @@ def hosts_cases(args, env):
                 with tempfile.TemporaryDirectory(prefix='pyv_transport_') as workdir:
                     case = Case(args, env, workdir)
                     sub = case.subscriber(kind, topic, NETNS[1])
-                    pub = case.publisher({'video_device': 'synthetic', 'image_width': width,
+                    case.publisher({'video_device': 'synthetic', 'image_width': width,
                                           'image_height': height, 'framerate': 30.0,
                                           'reliability': 'best_effort'}, netns=NETNS[0])
                     time.sleep(3.0 + args.window)
@@ -388,7 +389,7 @@ def main():
         reference = statistics.median(r['cpu_percent'] for r in rounds[names[0]])
         camera = statistics.median(r['cpu_percent'] for r in rounds[names[1]])
         rows = []
-        print('\n| case | CPU % (median) | x reference | without the camera\'s own CPU, '
+        print("\n| case | CPU % (median) | x reference | without the camera's own CPU, "
               'x reference | frames, raw, compressed, encoded, decoded (last round) |'
               '\n|---|---:|---:|---:|---|')
         for name, runs in rounds.items():
