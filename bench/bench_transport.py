@@ -341,8 +341,8 @@ def hosts_cases(args, env):
                     case = Case(args, env, workdir)
                     sub = case.subscriber(kind, topic, NETNS[1])
                     case.publisher({'video_device': 'synthetic', 'image_width': width,
-                                          'image_height': height, 'framerate': 30.0,
-                                          'reliability': 'best_effort'}, netns=NETNS[0])
+                                    'image_height': height, 'framerate': 30.0,
+                                    'reliability': 'best_effort'}, netns=NETNS[0])
                     time.sleep(3.0 + args.window)
                     results = case.stop()
                 records = results[sub.name][0].get('received', [])
