@@ -23,6 +23,7 @@ file fails here, naming it.
 """
 
 import re
+import time
 
 import pytest
 from rclpy.parameter import parameter_value_to_python
@@ -41,6 +42,7 @@ RUN_HERE = {
 UNSET_LINE = re.compile(r'^    # ([a-z_]+): (\S.*)$', re.MULTILINE)
 SECTION = re.compile(r'^([a-z_]+):\n(.*?)(?=^\S|\Z)', re.MULTILINE | re.DOTALL)
 START_TIMEOUT_S = 30.0
+RESEND_S = 2.0
 
 
 def file_sections():
@@ -61,18 +63,32 @@ def typed(values):
     return {name: (type(value).__name__, value) for name, value in values.items()}
 
 
+def answer(request, what):
+    """
+    Return the first response to request() (which sends one and returns its future).
+
+    The request is sent again every RESEND_S: a node can drop a reply while its path back to a
+    new client is still being matched (rmw: "failed to send response"), as `ros2 param` users
+    retry.
+    """
+    sent = []
+
+    def answered():
+        if not sent or time.monotonic() - sent[-1][0] > RESEND_S:
+            sent.append((time.monotonic(), request()))
+        return next((future.result() for _, future in sent if future.done()), None)
+    return wait_until(answered, START_TIMEOUT_S, 0.05, what)
+
+
 def running_parameters(peer, proc, node):
     """Return {name: value or None (not set)} of node's own parameters, as it runs."""
     client = AsyncParameterClient(peer.node, node)
     wait_until(client.services_are_ready, START_TIMEOUT_S, 0.1, 'the parameters of ' + node)
-    listed = client.list_parameters()
-    wait_until(listed.done, 10.0, what='the parameter list of ' + node)
+    listed = answer(client.list_parameters, 'the parameter list of ' + node)
     # Every rclpy node has ROS's own parameters (use_sim_time, ...): the peer has them too.
     ros_own = set(peer.node.get_parameters_by_prefix(''))
-    names = [name for name in listed.result().result.names if name not in ros_own]
-    reply = client.get_parameters(names)
-    wait_until(reply.done, 10.0, what='the parameter values of ' + node)
-    got = reply.result().values
+    names = [name for name in listed.result.names if name not in ros_own]
+    got = answer(lambda: client.get_parameters(names), 'the parameter values of ' + node).values
     assert len(got) == len(names), '%s answered %d values for %d parameters' % (
         node, len(got), len(names))
     values = {name: parameter_value_to_python(value) for name, value in zip(names, got)}
