@@ -42,6 +42,7 @@ _TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER,
           float: Parameter.Type.DOUBLE, str: Parameter.Type.STRING}
 _TYPE_WORDS = {bool: 'a boolean', int: 'an integer', float: 'a number', str: 'a string'}
 _TYPE_NAMES = {bool: 'bool', int: 'integer', float: 'double', str: 'string'}
+_NOT_SET_WORDS = ('null', '~', '')
 
 
 @dataclass(frozen=True)
@@ -196,6 +197,10 @@ class Parameters:
             probe = ParameterDescriptor(dynamic_typing=True)
             given = node.declare_parameter(spec.name, None, probe).value
             node.undeclare_parameter(spec.name)
+            # `ros2 param dump` writes a parameter that is not set as null, which rcl reads
+            # back as the string 'null': loading a dump leaves it not set.
+            if spec.optional and given in _NOT_SET_WORDS:
+                given = None
             if given is None:
                 if spec.optional:
                     node.declare_parameter(spec.name, None, spec.descriptor(),

@@ -269,17 +269,6 @@ class RosPeer:
         self.node.create_subscription(msg_type, topic, received.append, qos)
         return received
 
-    def call(self, srv_type, name, request, timeout=10.0):
-        """Call a service once its server is up; return the response (bounded waits)."""
-        client = self.node.create_client(srv_type, name)
-        try:
-            wait_until(client.service_is_ready, timeout, 0.05, 'service %s' % name)
-            future = client.call_async(request)
-            wait_until(future.done, timeout, 0.02, 'a response from %s' % name)
-            return future.result()
-        finally:
-            self.node.destroy_client(client)
-
     def close(self):
         import rclpy
         self.executor.shutdown()

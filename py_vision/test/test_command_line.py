@@ -101,6 +101,18 @@ def test_parameters_have_their_real_type_and_range(launch, peer):
     assert framerate.description and quality.description
 
 
+def test_a_dumped_not_set_control_loads_back_as_not_set(launch, peer, tmp_path):
+    # What `ros2 param dump` writes for a control left at the camera's own value.
+    dump = tmp_path / 'dump.yaml'
+    dump.write_text('usbcam_publisher:\n  ros__parameters:\n    brightness: null\n'
+                    '    contrast: 40\n    video_device: synthetic\n')
+    node = launch('usbcam_publisher', extra_args=['--params-file', str(dump)])
+    node.wait_for_output('opened synthetic', 20)
+    brightness, contrast = get_parameters(peer, 'usbcam_publisher', ['brightness', 'contrast'])
+    assert brightness.type == ParameterType.PARAMETER_NOT_SET
+    assert contrast.integer_value == 40
+
+
 def test_a_numeric_video_device_is_a_camera_index(launch):
     node = launch('usbcam_publisher', {'video_device': 97})
     assert node.wait_exit(20) == 1

@@ -16,34 +16,46 @@
 config/params.yaml against the installed nodes, through their ROS parameter services.
 
 The file must hold every parameter each node declares, and nothing else, with the node's
-default; and started with `--params-file`, a node must run with exactly the file's values.
+default; a parameter that is not set by default (a camera control) is there as a commented-out
+example line. Started with `--params-file`, a node must run with exactly the file's values.
 Both checks are driven by what the nodes declare, so a new parameter without its line in the
-file fails here.
+file fails here, naming it.
 """
 
 import re
+import time
 
 import pytest
-from rcl_interfaces.srv import GetParameters, ListParameters
 from rclpy.parameter import parameter_value_to_python
-import ros_harness
+from rclpy.parameter_client import AsyncParameterClient
+from ros_harness import EXECUTABLES, SHARE, wait_until
 import yaml
 
-PARAMS_FILE = ros_harness.SHARE / 'config' / 'params.yaml'
+PARAMS_FILE = SHARE / 'config' / 'params.yaml'
 # What a node needs to run on a test machine: no camera, and ports other tests may hold.
 RUN_HERE = {
     'usbcam_publisher': {'video_device': 'synthetic'},
     'usbcam_subscriber': {'display': 'none', 'web_port': 0},
     'cv_bridge_test': {'web_port': 0},
 }
+# A parameter not set by default: `    # name: example value` in its node's section.
+UNSET_LINE = re.compile(r'^    # ([a-z_]+): (\S.*)$', re.MULTILINE)
+SECTION = re.compile(r'^([a-z_]+):\n(.*?)(?=^\S|\Z)', re.MULTILINE | re.DOTALL)
 START_TIMEOUT_S = 30.0
+RESEND_S = 2.0
 
 
 def file_sections():
     """Return the installed params.yaml as {node name: {parameter: value}}."""
-    with open(PARAMS_FILE) as handle:
-        content = yaml.safe_load(handle)
+    content = yaml.safe_load(PARAMS_FILE.read_text())
     return {node: section['ros__parameters'] for node, section in content.items()}
+
+
+def unset_examples(text=None):
+    """Return {node name: {parameter: example value}} of the commented-out parameter lines."""
+    sections = SECTION.findall(text or PARAMS_FILE.read_text())
+    return {node: {name: yaml.safe_load(value) for name, value in UNSET_LINE.findall(body)}
+            for node, body in sections}
 
 
 def typed(values):
@@ -51,22 +63,42 @@ def typed(values):
     return {name: (type(value).__name__, value) for name, value in values.items()}
 
 
+def answer(request, what):
+    """
+    Return the first response to request() (which sends one and returns its future).
+
+    The request is sent again every RESEND_S: a node can drop a reply while its path back to a
+    new client is still being matched (rmw: "failed to send response"), as `ros2 param` users
+    retry.
+    """
+    sent = []
+
+    def answered():
+        if not sent or time.monotonic() - sent[-1][0] > RESEND_S:
+            sent.append((time.monotonic(), request()))
+        return next((future.result() for _, future in sent if future.done()), None)
+    return wait_until(answered, START_TIMEOUT_S, 0.05, what)
+
+
 def running_parameters(peer, proc, node):
-    """Return {name: value} of the parameters node declares beyond ROS's own, as it runs."""
-    names = peer.call(ListParameters, '/%s/list_parameters' % node, ListParameters.Request(),
-                      START_TIMEOUT_S).result.names
-    response = peer.call(GetParameters, '/%s/get_parameters' % node,
-                         GetParameters.Request(names=names))
-    if proc.proc.poll() is not None:
-        proc.fail('%s exited while its parameters were read' % node)
+    """Return {name: value or None (not set)} of node's own parameters, as it runs."""
+    client = AsyncParameterClient(peer.node, node)
+    wait_until(client.services_are_ready, START_TIMEOUT_S, 0.1, 'the parameters of ' + node)
+    listed = answer(client.list_parameters, 'the parameter list of ' + node)
     # Every rclpy node has ROS's own parameters (use_sim_time, ...): the peer has them too.
     ros_own = set(peer.node.get_parameters_by_prefix(''))
-    return {name: parameter_value_to_python(value) for name, value in zip(names, response.values)
-            if name not in ros_own}
+    names = [name for name in listed.result.names if name not in ros_own]
+    got = answer(lambda: client.get_parameters(names), 'the parameter values of ' + node).values
+    assert len(got) == len(names), '%s answered %d values for %d parameters' % (
+        node, len(got), len(names))
+    values = {name: parameter_value_to_python(value) for name, value in zip(names, got)}
+    if proc.proc.poll() is not None:
+        proc.fail('%s exited while its parameters were read' % node)
+    return values
 
 
 def test_the_file_has_a_section_for_every_installed_executable():
-    installed = sorted(path.name for path in ros_harness.EXECUTABLES.iterdir())
+    installed = sorted(path.name for path in EXECUTABLES.iterdir())
     assert sorted(file_sections()) == installed
     assert sorted(RUN_HERE) == installed
 
@@ -75,32 +107,31 @@ def test_the_file_has_a_section_for_every_installed_executable():
 def test_the_file_holds_every_declared_parameter_with_its_default(launch, peer, node):
     proc = launch(node, params=RUN_HERE[node])
     declared = running_parameters(peer, proc, node)
-    # A parameter that is not set (a camera control left at the camera's own value) has no
-    # value to write: the file names it in a comment instead.
-    not_set = sorted(name for name, value in declared.items() if value is None)
-    text = PARAMS_FILE.read_text()
-    unnamed = [name for name in not_set if not re.search(r'#\s*%s:' % name, text)]
-    assert not unnamed, 'params.yaml does not mention %s (not set by default)' % unnamed
-    declared = {name: value for name, value in declared.items() if value is not None}
-    expected = dict(file_sections()[node], **RUN_HERE[node])
-    missing = sorted(set(declared) - set(expected))
-    extra = sorted(set(expected) - set(declared))
+    values = dict(file_sections()[node], **RUN_HERE[node])
+    unset = unset_examples().get(node, {})
+    missing = sorted(set(declared) - set(values) - set(unset))
+    extra = sorted((set(values) | set(unset)) - set(declared))
     assert not missing, '%s declares %s, missing in params.yaml: add with the default' % (
         node, missing)
     assert not extra, 'params.yaml has %s, which %s does not declare' % (extra, node)
-    assert typed(declared) == typed(expected), \
-        'the defaults of %s (left) differ from params.yaml (right)' % node
+    assert typed({name: value for name, value in declared.items() if name in values}) == \
+        typed(values), 'the defaults of %s (left) differ from params.yaml (right)' % node
+    not_set = sorted(name for name, value in declared.items() if value is None)
+    assert not_set == sorted(unset), \
+        'only parameters not set by default may be commented out in params.yaml'
 
 
 @pytest.mark.parametrize('node', sorted(RUN_HERE))
 def test_a_node_runs_with_exactly_the_values_of_its_params_file(launch, peer, node, tmp_path):
-    # The installed file, changed only where the node could not run here: those values also
-    # differ from the defaults, which shows that the file, not a default, reached the node.
-    content = yaml.safe_load(PARAMS_FILE.read_text())
-    content[node]['ros__parameters'].update(RUN_HERE[node])
+    # The installed file with its commented-out examples set, changed only where the node could
+    # not run here: those values also differ from the defaults, which shows that the file, not
+    # a default, reached the node.
+    text = PARAMS_FILE.read_text()
+    content = yaml.safe_load(text)
+    parameters = content[node]['ros__parameters']
+    parameters.update(unset_examples(text).get(node, {}))
+    parameters.update(RUN_HERE[node])
     params_file = tmp_path / 'params.yaml'
     params_file.write_text(yaml.safe_dump(content))
     proc = launch(node, extra_args=['--params-file', str(params_file)])
-    running = running_parameters(peer, proc, node)
-    assert typed({k: v for k, v in running.items() if v is not None}) == \
-        typed(content[node]['ros__parameters'])
+    assert typed(running_parameters(peer, proc, node)) == typed(parameters)
