@@ -20,8 +20,8 @@ Usage: python3 petalinux/enable_ros.py PROJECT_DIR [--board B] [--check | --dry-
 
 The package lists come from petalinux/boards/<board>/user-rootfsconfig (declarations) and
 petalinux/boards/<board>/rootfs_config (enabled packages): the tutorial's ROS 2 packages, the
-Python modules py_vision imports (OpenCV, numpy, PyYAML) and xauth for ssh -X windows. The tool edits two project files,
-keeping every byte it has no reason to touch:
+Python modules py_vision imports (OpenCV, numpy, PyYAML) and xauth for ssh -X windows. The tool
+edits two project files, keeping every byte it has no reason to touch:
 
 - project-spec/meta-user/conf/user-rootfsconfig: PetaLinux reads every line that contains
   the config prefix as a declaration (comments too) and takes the name up to the next
