@@ -14,13 +14,14 @@
 # limitations under the License.
 
 """
-Declare and enable the ROS 2 rootfs packages in a PetaLinux 2023.2 project.
+Declare and enable the rootfs packages py_vision needs in a PetaLinux 2023.2 project.
 
 Usage: python3 petalinux/enable_ros.py PROJECT_DIR [--board B] [--check | --dry-run]
 
 The package lists come from petalinux/boards/<board>/user-rootfsconfig (declarations) and
-petalinux/boards/<board>/rootfs_config (enabled packages). The tool edits two project files,
-keeping every byte it has no reason to touch:
+petalinux/boards/<board>/rootfs_config (enabled packages): the tutorial's ROS 2 packages, the
+Python modules py_vision imports (OpenCV, numpy, PyYAML) and xauth for ssh -X windows. The tool
+edits two project files, keeping every byte it has no reason to touch:
 
 - project-spec/meta-user/conf/user-rootfsconfig: PetaLinux reads every line that contains
   the config prefix as a declaration (comments too) and takes the name up to the next
@@ -460,8 +461,9 @@ def parse_args(argv):
     """Parse the command line."""
     parser = argparse.ArgumentParser(
         prog='enable_ros.py',
-        description='Declare and enable the ROS 2 rootfs packages of py_vision in a '
-                    'PetaLinux 2023.2 project (user-rootfsconfig and rootfs_config).',
+        description='Declare and enable the rootfs packages py_vision needs (ROS 2, OpenCV, '
+                    'numpy, PyYAML, xauth) in a PetaLinux 2023.2 project '
+                    '(user-rootfsconfig and rootfs_config).',
         epilog='Exit status: 0 done (--check: fully enabled), 1 --check: something is '
                'missing, 2 error.')
     parser.add_argument('project', metavar='PROJECT_DIR', help='the PetaLinux project')

@@ -41,9 +41,13 @@ USER = Path('project-spec/meta-user/conf/user-rootfsconfig')
 ROOTFS = Path('project-spec/configs/rootfs_config')
 CONFIG = Path('project-spec/configs/config')
 
-# The issue's package list, which every board's fragments hold today.
-ROS = ['packagegroup-petalinux-ros', 'packagegroup-petalinux-ros-dev', 'cv-bridge',
-       'cv-bridge-dev', 'v4l2-camera', 'v4l2-camera-dev', 'turtlesim', 'turtlesim-dev']
+# The tutorial's eight packages, then what py_vision runs on whatever they bring (OpenCV's and
+# numpy's Python modules, PyYAML) and xauth for ssh -X windows: every board's fragments hold
+# these today, in this order.
+TUTORIAL = ['packagegroup-petalinux-ros', 'packagegroup-petalinux-ros-dev', 'cv-bridge',
+            'cv-bridge-dev', 'v4l2-camera', 'v4l2-camera-dev', 'turtlesim', 'turtlesim-dev']
+RUNTIME = ['python3-opencv', 'python3-numpy', 'python3-pyyaml', 'xauth']
+PACKAGES = TUTORIAL + RUNTIME
 BOARDS = {'zub1cg': 'zub1cg-sbc-2023-2', 'u96v2': 'u96v2-sbc-2023-2',
           'uz7ev': 'uz7ev-evcc-2023-2'}
 
@@ -93,9 +97,9 @@ def make_project(tmp_path, board, state):
     user = (project / USER).read_text()
     rootfs = (project / ROOTFS).read_text()
     if state == 'declared_not_set':
-        # Declared, and petalinux-config has run: the packagegroups are 'is not set', the
-        # bridge is on, the rest was never written.
-        user += ''.join('CONFIG_%s\n' % name for name in ROS)
+        # The tutorial's packages declared, and petalinux-config has run: the packagegroups are
+        # 'is not set', the bridge is on, the rest was never written.
+        user += ''.join('CONFIG_%s\n' % name for name in TUTORIAL)
         rootfs = block_entries(rootfs, {
             'packagegroup-petalinux-ros': '# CONFIG_packagegroup-petalinux-ros is not set',
             'packagegroup-petalinux-ros-dev':
@@ -103,15 +107,23 @@ def make_project(tmp_path, board, state):
             'cv-bridge': 'CONFIG_cv-bridge=y', 'cv-bridge-dev': 'CONFIG_cv-bridge-dev=y'})
     elif state == 'commented':
         user += ''.join(('#CONFIG_%s\n', '# CONFIG_%s\n')[i % 2] % name
-                        for i, name in enumerate(ROS))
+                        for i, name in enumerate(PACKAGES))
     elif state == 'no_final_newline':
         user = user.rstrip('\n')
         rootfs = without_block(rootfs).rstrip('\n')
     elif state == 'no_block':
         rootfs = without_block(rootfs)
     elif state == 'enabled':
-        user += ''.join('CONFIG_%s\n' % name for name in ROS)
-        rootfs = block_entries(rootfs, {name: 'CONFIG_%s=y' % name for name in ROS})
+        user += ''.join('CONFIG_%s\n' % name for name in PACKAGES)
+        rootfs = block_entries(rootfs, {name: 'CONFIG_%s=y' % name for name in PACKAGES})
+    elif state == 'tutorial':
+        # Everything the tutorial says, done by hand before py_vision's own packages existed.
+        user += ''.join('CONFIG_%s\n' % name for name in TUTORIAL)
+        rootfs = block_entries(rootfs, {name: 'CONFIG_%s=y' % name for name in TUTORIAL})
+    elif state == 'other_menu':
+        # Packages that a PetaLinux menu of its own lists, switched off there.
+        rootfs = re.sub(r'(\n(# )?CONFIG_python3-pip[^\n]*\n)',
+                        r'\1# CONFIG_python3-numpy is not set\nCONFIG_xauth=n\n', rootfs, count=1)
     elif state == 'crlf':
         user, rootfs = user.replace('\n', '\r\n'), rootfs.replace('\n', '\r\n')
     elif state == 'messy':
@@ -135,40 +147,40 @@ def make_project(tmp_path, board, state):
 
 
 STATES = ['fresh', 'declared_not_set', 'commented', 'no_final_newline', 'no_block', 'enabled',
-          'crlf', 'messy']
+          'tutorial', 'other_menu', 'crlf', 'messy']
 
 
 # ---------------------------------------------------------------------------------------------
 # What a correct result looks like
 
 def assert_enabled(project):
-    """Assert PetaLinux declares and Kconfig enables every ROS package exactly once."""
+    """Assert PetaLinux declares and Kconfig enables every package exactly once."""
     user = (project / USER).read_bytes()
     rootfs = (project / ROOTFS).read_bytes()
     declared = model.declarations(user)
     values = model.assignments(rootfs)
     installed = model.image_packages(rootfs)
-    for name in ROS:
+    for name in PACKAGES:
         assert declared.count(name) == 1, (name, declared)
         assert values.get(name) == ['y'], (name, values.get(name))
         assert installed.count(name) == 1, name
     lines = model.kconfig_lines(user)
-    assert all('CONFIG_%s' % name in lines for name in ROS)
+    assert all('CONFIG_%s' % name in lines for name in PACKAGES)
 
 
 def raw_lines(data):
     return data.decode('utf-8', 'surrogateescape').splitlines(keepends=True)
 
 
-def ros_line(line):
-    """Return whether a line (with or without its end) is about one of the ROS packages."""
+def package_line(line):
+    """Return whether a line (with or without its end) is about one of our packages."""
     text = line.rstrip('\r\n')
     match = re.search(r'CONFIG_([^= ]+)', text)
-    return bool(match) and match.group(1) in ROS
+    return bool(match) and match.group(1) in PACKAGES
 
 
-def assert_only_ros_lines_changed(before, after):
-    """Assert the only differences are ROS lines and a newline given to a last line."""
+def assert_only_package_lines_changed(before, after):
+    """Assert the only differences are lines of our packages and a newline given to a last line."""
     old, new = raw_lines(before), raw_lines(after)
     matcher = difflib.SequenceMatcher(a=old, b=new, autojunk=False)
     for op, a0, a1, b0, b1 in matcher.get_opcodes():
@@ -180,16 +192,16 @@ def assert_only_ros_lines_changed(before, after):
             assert added and added[0] == removed[-1] + added[0][len(removed[-1]):], added
             assert added[0][len(removed[-1]):] in ('\n', '\r\n')
             removed, added = removed[:-1], added[1:]
-        assert all(ros_line(line) for line in removed), removed
+        assert all(package_line(line) for line in removed), removed
         for line in added:
             assert re.fullmatch(r'CONFIG_([^=\s]+)(=y)?\r?\n', line), line
-            assert ros_line(line), line
+            assert package_line(line), line
 
 
 def neighbours(lines, index):
-    """Return the nearest lines above and below lines[index] that are not ROS lines."""
-    above = next(line for line in reversed(lines[:index]) if not ros_line(line))
-    below = next((line for line in lines[index + 1:] if not ros_line(line)), None)
+    """Return the nearest lines above and below lines[index] that are not lines of our packages."""
+    above = next(line for line in reversed(lines[:index]) if not package_line(line))
+    below = next((line for line in lines[index + 1:] if not package_line(line)), None)
     return above, below
 
 
@@ -219,7 +231,7 @@ def test_enables_every_state_and_is_idempotent(tmp_path, board, state):
     assert_enabled(project)
     after = {path: (project / path).read_bytes() for path in before}
     for path in before:
-        assert_only_ros_lines_changed(before[path], after[path])
+        assert_only_package_lines_changed(before[path], after[path])
     if state == 'enabled':
         assert after == before
         assert 'nothing to change' in first.stdout
@@ -236,13 +248,13 @@ def test_fresh_project_adds_in_sorted_block_and_appends_declarations(tmp_path):
     before_user = (project / USER).read_text()
     assert run_tool(project).returncode == 0
     user = (project / USER).read_text()
-    assert user == before_user + ''.join('CONFIG_%s\n' % name for name in ROS)
+    assert user == before_user + ''.join('CONFIG_%s\n' % name for name in PACKAGES)
     lines = (project / ROOTFS).read_text().split('\n')
     start = lines.index('# user packages ') + 2
     end = lines.index('', start)
     names = [re.search(r'CONFIG_([^= ]+)', line).group(1) for line in lines[start:end]]
     assert names == sorted(names)
-    assert set(ROS) <= set(names)
+    assert set(PACKAGES) <= set(names)
     assert 'gpio-demo' in names and 'blinky' in names  # the board's own packages stay
     assert lines[end + 2] == '# PetaLinux RootFS Settings'
 
@@ -255,9 +267,49 @@ def test_is_not_set_lines_are_switched_in_place(tmp_path):
     after = (project / ROOTFS).read_text().split('\n')
     for name in ('packagegroup-petalinux-ros', 'packagegroup-petalinux-ros-dev'):
         assert_in_place(before, '# CONFIG_%s is not set' % name, after, 'CONFIG_%s=y' % name)
-    assert (project / USER).read_bytes() == user_before  # already declared: untouched
-    assert 'user-rootfsconfig: declared 0, already 8' in result.stdout
-    assert 'rootfs_config: enabled 6, already 2' in result.stdout
+    # The tutorial's declarations stay as they are; py_vision's own packages are appended.
+    assert (project / USER).read_bytes() == user_before + b''.join(
+        b'CONFIG_%s\n' % name.encode() for name in RUNTIME)
+    assert 'user-rootfsconfig: declared 4, already 8' in result.stdout
+    assert 'rootfs_config: enabled 10, already 2' in result.stdout
+
+
+def test_a_tutorial_project_gets_exactly_what_py_vision_runs_on(tmp_path):
+    # A project that followed the tutorial has the eight ROS packages and lacks OpenCV's and
+    # numpy's Python modules, PyYAML and xauth as packages of its own.
+    project = make_project(tmp_path, 'zub1cg', 'tutorial')
+    check = run_tool(project, '--check')
+    assert check.returncode == 1
+    problems = [line.strip() for line in check.stdout.split('problem(s):')[1].splitlines()
+                if line.startswith('  ')]
+    assert problems == (['user-rootfsconfig: %s: not declared' % name for name in RUNTIME]
+                        + ['rootfs_config: %s: not assigned' % name for name in RUNTIME])
+    before = (project / ROOTFS).read_text().split('\n')
+    result = run_tool(project)
+    assert result.returncode == 0, result.stderr
+    assert 'user-rootfsconfig: declared 4, already 8' in result.stdout
+    assert 'rootfs_config: enabled 4, already 8' in result.stdout
+    after = (project / ROOTFS).read_text().split('\n')
+    start = after.index('# user packages ') + 2
+    block = after[start:after.index('', start)]
+    names = [re.search(r'CONFIG_([^= ]+)', line).group(1) for line in block]
+    assert names == sorted(names)  # the new ones in sorted place among the block's own
+    assert {'CONFIG_%s=y' % name for name in PACKAGES} <= set(block)
+    assert len(after) == len(before) + len(RUNTIME)
+    installed = model.image_packages((project / ROOTFS).read_bytes())
+    assert all(installed.count(name) == 1 for name in RUNTIME)
+
+
+def test_packages_in_a_petalinux_menu_are_switched_on_there(tmp_path):
+    project = make_project(tmp_path, 'u96v2', 'other_menu')
+    before = (project / ROOTFS).read_text().split('\n')
+    assert run_tool(project).returncode == 0
+    after = (project / ROOTFS).read_text().split('\n')
+    assert_in_place(before, '# CONFIG_python3-numpy is not set', after,
+                    'CONFIG_python3-numpy=y')
+    assert_in_place(before, 'CONFIG_xauth=n', after, 'CONFIG_xauth=y')
+    assert model.assignments((project / ROOTFS).read_bytes())['xauth'] == ['y']
+    assert_enabled(project)
 
 
 def test_commented_declarations_are_uncommented_in_place(tmp_path):
@@ -266,7 +318,7 @@ def test_commented_declarations_are_uncommented_in_place(tmp_path):
     assert run_tool(project).returncode == 0
     after = (project / USER).read_text().split('\n')
     assert len(after) == len(before)
-    for name in ROS:
+    for name in PACKAGES:
         commented = [line for line in before if line.lstrip('# ') == 'CONFIG_' + name]
         assert after.index('CONFIG_' + name) == before.index(commented[0])
 
@@ -278,9 +330,9 @@ def test_missing_final_newline_is_never_glued(tmp_path):
     assert not user_before.endswith(b'\n') and not rootfs_before.endswith(b'\n')
     assert run_tool(project).returncode == 0
     assert (project / USER).read_bytes() == user_before + b'\n' + b''.join(
-        b'CONFIG_%s\n' % name.encode() for name in ROS)
+        b'CONFIG_%s\n' % name.encode() for name in PACKAGES)
     assert (project / ROOTFS).read_bytes() == rootfs_before + b'\n' + b''.join(
-        b'CONFIG_%s=y\n' % name.encode() for name in ROS)
+        b'CONFIG_%s=y\n' % name.encode() for name in PACKAGES)
     assert b'CONFIG_ADD_USERS_TO_SUDOERS="petalinux"\n' in (project / ROOTFS).read_bytes()
 
 
@@ -322,7 +374,7 @@ def test_other_bytes_survive_even_when_not_utf8(tmp_path):
     assert run_tool(project).returncode == 0
     after = (project / USER).read_bytes()
     assert after.startswith(before)
-    assert model.declarations(after)[-len(ROS):] == ROS
+    assert model.declarations(after)[-len(PACKAGES):] == PACKAGES
 
 
 # ---------------------------------------------------------------------------------------------
@@ -349,7 +401,9 @@ def test_check_lists_what_is_missing(tmp_path):
     assert result.returncode == 1
     assert 'rootfs_config: packagegroup-petalinux-ros: line' in result.stdout
     assert 'rootfs_config: turtlesim-dev: not assigned' in result.stdout
-    assert 'user-rootfsconfig' not in result.stdout.split('problem(s):')[1]
+    problems = result.stdout.split('problem(s):')[1]
+    assert [line.strip() for line in problems.splitlines() if 'user-rootfsconfig' in line] == [
+        'user-rootfsconfig: %s: not declared' % name for name in RUNTIME]
     assert 'rootfs_config: cv-bridge:' not in result.stdout
 
 
@@ -482,10 +536,10 @@ def test_fragments_hold_the_ros_packages_and_obey_petalinux_rules(board):
     directory = HERE.parent / 'boards' / board
     user = (directory / 'user-rootfsconfig').read_bytes()
     rootfs = (directory / 'rootfs_config').read_bytes()
-    assert model.declarations(user) == ROS  # no comment that PetaLinux would misread
-    assert model.assignments(rootfs) == {name: ['y'] for name in ROS}
-    assert model.image_packages(rootfs) == ROS
-    assert enable_ros.load_fragments(board) == (ROS, ROS)
+    assert model.declarations(user) == PACKAGES  # no comment that PetaLinux would misread
+    assert model.assignments(rootfs) == {name: ['y'] for name in PACKAGES}
+    assert model.image_packages(rootfs) == PACKAGES
+    assert enable_ros.load_fragments(board) == (PACKAGES, PACKAGES)
 
 
 def test_a_board_can_differ_by_editing_its_fragments(tmp_path, monkeypatch):
