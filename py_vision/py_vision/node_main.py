@@ -32,7 +32,7 @@ import threading
 from py_vision import dds
 from py_vision.params import ConfigError, help_text
 import rclpy
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.logging import get_logger
 
 __all__ = ['ConfigError', 'main_for', 'run']
@@ -131,6 +131,9 @@ def run(node_class, args=None):
             node_class.NODE_NAME, error))
         _shutdown_quietly()
         return 2
+    # Made now, while rclpy runs: an executor first made after a signal has shut rclpy down
+    # is left half-built, and Python complains about it at exit.
+    executor = SingleThreadedExecutor()
     _Stopping.rclpy_up = True
     node = None
     built = False
@@ -141,7 +144,8 @@ def run(node_class, args=None):
         node = node_class.__new__(node_class)
         node.__init__()
         built = True
-        rclpy.spin(node)
+        executor.add_node(node)
+        executor.spin()
     except ConfigError as error:
         logger = node.get_logger() if _has_logger(node) else get_logger(node_class.NODE_NAME)
         logger.error(str(error))
@@ -160,6 +164,10 @@ def run(node_class, args=None):
             node.close()
             if built:
                 node.destroy_node()
+        try:
+            executor.shutdown()
+        except Exception:  # rclpy already tore it down with its context
+            pass
         _shutdown_quietly()
     if getattr(node, 'failed', False):
         status = 1

@@ -104,15 +104,18 @@ class USBImagePublisher(Node):
     # What close() finds when start-up was interrupted before these were made.
     camera = None
     _thread = None
+    _log_name = NODE_NAME
     frames_captured = raw_published = compressed_published = frames_decoded = 0
 
     def __init__(self):
         super().__init__(self.NODE_NAME)
+        # rclpy may be shut down when close() logs (Ctrl-C): a logger that does not publish
+        # to /rosout, named after the node's real name.
+        self._log_name = self.get_logger().name
         # One conversion or decode per frame gains nothing from OpenCV's worker threads,
         # which spin after every parallel call: one thread halves the capture's CPU
         # (bench/bench_transport.py).
         cv2.setNumThreads(1)
-        self._log_name = self.get_logger().name
         self._stop = threading.Event()
         self._camera_lock = threading.Lock()
         self.camera = None
@@ -139,6 +142,8 @@ class USBImagePublisher(Node):
             self.camera = self._open()
         except SourceError as error:
             raise ConfigError(str(error))
+        if not self.context.ok():
+            return  # Ctrl-C while the camera opened: close() releases it
         self.calibration = CameraInfoManager(
             values['camera_name'], values['camera_info_url'], self.get_logger())
         self.calibration.load()
@@ -303,17 +308,17 @@ class USBImagePublisher(Node):
     def close(self):
         """Stop capturing; the capture thread releases the camera."""
         thread = self._thread
+        logger = get_logger(self._log_name + '.camera')
         if thread is None:  # start-up was interrupted before capturing began
             if self.camera is not None:
                 self.camera.release()
+                logger.info('camera released before capturing began')
             return
         self._stop.set()
         camera = self.camera
         if camera is not None:
             camera.interrupt()  # a synthetic camera or a file waiting for its next frame
         thread.join(2.0)
-        # rclpy may be shut down already (Ctrl-C): a logger that does not publish to /rosout.
-        logger = get_logger(self._log_name + '.camera')
         if thread.is_alive():
             logger.warning('%s is still busy; the system releases it at exit' % self.video_device)
         else:
