@@ -65,7 +65,9 @@ def commands(kind, width, height, fps):
         ('publisher', [str(EXECUTABLES / 'usbcam_publisher'), '--ros-args',
                        '-p', 'video_device:=synthetic', '-p', 'image_width:=%d' % width,
                        '-p', 'image_height:=%d' % height, '-p', 'framerate:=%r' % fps]),
-        ('processor', [str(EXECUTABLES / 'cv_bridge_test')]),
+        # Told the camera's size, as pipeline.launch.py and params.yaml's /** entry tell it.
+        ('processor', [str(EXECUTABLES / 'cv_bridge_test'), '--ros-args',
+                       '-p', 'image_width:=%d' % width, '-p', 'image_height:=%d' % height]),
         ('subscriber', [str(EXECUTABLES / 'usbcam_subscriber'), '--ros-args',
                         '-p', 'display:=none', '-p', 'stats_period:=1.0',
                         '-r', 'usb_camera/image:=cv_bridge_image']),

@@ -33,11 +33,10 @@ temporary directory and named after its content, tailored to the node:
   with it every peer on another host.
 """
 
-import hashlib
 import os
 import sys
-import tempfile
 import xml.etree.ElementTree as ET
+import zlib
 
 from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
 
@@ -54,7 +53,7 @@ _KERNEL_LIMITS = {
 # the segment has to be sized and parameters do not exist yet.
 NO_IMAGES = 'no images'
 OWN_SIZE = 'images of its image_width x image_height parameters'
-INPUT_SIZE = 'images as large as those it receives'
+INPUT_SIZE = 'images as large as those it receives (told by image_width, image_height)'
 
 # Fast DDS' own default segment: enough for everything but images.
 SMALL_SEGMENT = 512 * 1024
@@ -121,13 +120,13 @@ def _params_file_size(path, node_name):
     return dict(wildcard, **own)
 
 
-def requested_size(args, node_name):
+def requested_size(args, node_name, default=DEFAULT_SIZE):
     """
     Return the (width, height) a node's command line asks for, read without rclpy.
 
     From `-p image_width:=W -p image_height:=H` and `--params-file FILE` (the command line
-    wins, as in rcl); DEFAULT_SIZE where neither says; SAFE_SIZE when a value or a file
-    cannot be read, so a misread never makes the segment too small.
+    wins, as in rcl); default where neither says; SAFE_SIZE when a value or a file cannot be
+    read, so a misread never makes the segment too small.
     """
     values = {}
     given = {}
@@ -143,8 +142,8 @@ def requested_size(args, node_name):
                 if name in ('image_width', 'image_height'):
                     given[name] = text
         values.update({name: int(text) for name, text in given.items()})
-        size = (int(values.get('image_width', DEFAULT_SIZE[0])),
-                int(values.get('image_height', DEFAULT_SIZE[1])))
+        size = (int(values.get('image_width', default[0])),
+                int(values.get('image_height', default[1])))
     except Exception:  # a light read: anything unexpected means "assume large frames"
         return SAFE_SIZE
     return size if min(size) > 0 else SAFE_SIZE
@@ -154,8 +153,13 @@ def segment_size(publishes, args=(), node_name=''):
     """Return the shared-memory segment, in bytes, for a node that publishes `publishes`."""
     if publishes == NO_IMAGES:
         return SMALL_SEGMENT
-    width, height = requested_size(args, node_name) if publishes in (OWN_SIZE, INPUT_SIZE) \
-        else SAFE_SIZE
+    if publishes == OWN_SIZE:
+        width, height = requested_size(args, node_name)
+    elif publishes == INPUT_SIZE:
+        # It cannot know what it will receive unless told the same size as the camera.
+        width, height = requested_size(args, node_name, SAFE_SIZE)
+    else:
+        width, height = SAFE_SIZE
     return max(SMALL_SEGMENT, SEGMENT_FRAMES * width * height * BYTES_PER_PIXEL)
 
 
@@ -203,19 +207,33 @@ def tailor(profile, segment=None, localhost=False, limits=None):
             changed = True
     if not changed:
         return profile
-    fitted = ET.tostring(tree.getroot(), encoding='unicode')
-    # Named after its content, so an upgraded profile never meets a stale copy; a file of
-    # another user's is never trusted.
-    digest = hashlib.sha256(fitted.encode()).hexdigest()[:16]
-    path = os.path.join(tempfile.gettempdir(), 'py_vision_fastdds_%d_%s.xml' % (
-        os.getuid(), digest))
-    if not (os.path.isfile(path) and os.stat(path).st_uid == os.getuid()):
-        handle, partial = tempfile.mkstemp(dir=os.path.dirname(path), suffix='.xml')
-        with os.fdopen(handle, 'w') as out:
-            out.write('<?xml version="1.0" encoding="UTF-8"?>\n' + fitted + '\n')
-        os.chmod(partial, 0o644)
+    fitted = '<?xml version="1.0" encoding="UTF-8"?>\n%s\n' % ET.tostring(
+        tree.getroot(), encoding='unicode')
+    # Named after its content, so an upgraded profile rarely meets a stale copy, and checked
+    # anyway; a file of another user's is never trusted. (zlib, not hashlib: OpenSSL would add
+    # 4 MB to every node.)
+    path = os.path.join(os.environ.get('TMPDIR') or '/tmp', 'py_vision_fastdds_%d_%08x.xml' % (
+        os.getuid(), zlib.crc32(fitted.encode())))
+    if not _holds(path, fitted):
+        partial = '%s.%d' % (path, os.getpid())
+        if os.path.lexists(partial):  # left by a killed process that had this pid
+            os.unlink(partial)
+        # Created here, never an existing file or link in the shared directory.
+        with os.fdopen(os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644), 'w') as out:
+            out.write(fitted)
         os.replace(partial, path)
     return path
+
+
+def _holds(path, text):
+    """Return True if path is this user's file and holds text."""
+    try:
+        if os.stat(path).st_uid != os.getuid():
+            return False
+        with open(path) as existing:
+            return existing.read() == text
+    except OSError:
+        return False
 
 
 def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.environ):

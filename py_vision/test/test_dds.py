@@ -83,9 +83,14 @@ def test_segment_holds_the_frames_a_node_publishes_and_no_more():
     assert full_hd == vga * (1920 * 1080) // (640 * 480)
     # What it publishes unknown: as large as 1920x1080.
     assert dds.segment_size(None) == full_hd
-    # Arguments after a closing -- are not ROS arguments.
+    # Told nothing, a node that republishes what it receives must assume large frames.
+    assert dds.segment_size(dds.INPUT_SIZE, [], 'cv_bridge_test') == full_hd
     assert dds.segment_size(dds.INPUT_SIZE, [
-        '--ros-args', '--', '-p', 'image_width:=1920'], 'cv_bridge_test') == vga
+        '--ros-args', '-p', 'image_width:=640', '-p', 'image_height:=480'],
+        'cv_bridge_test') == vga
+    # Arguments after a closing -- are not ROS arguments.
+    assert dds.segment_size(dds.OWN_SIZE, [
+        '--ros-args', '--', '-p', 'image_width:=1920'], 'usbcam_publisher') == vga
 
 
 def test_frame_size_from_a_parameter_file(tmp_path):
