@@ -21,7 +21,8 @@ One command, every case in separate processes, one after the other:
 
 Cases (``--cases`` takes group names or substrings of case names):
   ref-default   bare rclpy publisher -> bare subscriber, Fast DDS defaults (no XML profile)
-  ref-tuned     the same with FASTRTPS_DEFAULT_PROFILES_FILE = py_vision's installed profile
+  ref-tuned     the same with FASTRTPS_DEFAULT_PROFILES_FILE = py_vision's installed profile,
+                its shared memory sized for three frames as py_vision's publisher sizes it
   pyv-pyv       usbcam_publisher (synthetic source) -> usbcam_subscriber (display:=none)
   pyv-bare      usbcam_publisher (synthetic source) -> bare subscriber
   pyv-bare-throttled  the same, the publisher with a throughput controller (see THROTTLE)
@@ -43,6 +44,7 @@ import argparse
 import json
 import os
 from pathlib import Path
+import re
 import shutil
 import signal
 import subprocess
@@ -322,14 +324,22 @@ def commands(case, python):
 # 2.x's throughput controller (XML in 2.6 and 2.14; named flow controllers only from 3.0) on
 # an asynchronous writer. It paces every transport of the writer, shared memory included.
 THROTTLE = (65536, 1)  # bytes per period, period in ms
-THROTTLED_WRITER = '''  <data_writer profile_name="py_vision_throttled" is_default_profile="true">
-    <qos><publishMode><kind>ASYNCHRONOUS</kind></publishMode></qos>
-    <throughputController>
-      <bytesPerPeriod>%d</bytesPerPeriod>
-      <periodMillisecs>%d</periodMillisecs>
-    </throughputController>
-  </data_writer>
-</profiles>'''
+THROTTLED_WRITER = (
+    '  <data_writer profile_name="py_vision_throttled" is_default_profile="true">\n'
+    '    <qos><publishMode><kind>ASYNCHRONOUS</kind></publishMode></qos>\n'
+    '    <throughputController>\n'
+    '      <bytesPerPeriod>%d</bytesPerPeriod>\n'
+    '      <periodMillisecs>%d</periodMillisecs>\n'
+    '    </throughputController>\n'
+    '  </data_writer>\n'
+    '</profiles>')
+
+
+def sized_profile(case):
+    """Return the installed profile's text with shared memory for three of the case's frames."""
+    # As py_vision's publisher sizes its own (py_vision/dds.py); the file holds VGA's.
+    return re.sub(r'<segment_size>\d+</segment_size>', '<segment_size>%d</segment_size>' % (
+        3 * case['width'] * case['height'] * 3), PROFILE.read_text())
 
 
 def publisher_env(env, case, workdir):
@@ -337,13 +347,13 @@ def publisher_env(env, case, workdir):
     if case['transport'] != 'throttled':
         return env
     profile = workdir / 'throttled.xml'
-    profile.write_text(PROFILE.read_text().replace('</profiles>', THROTTLED_WRITER % THROTTLE))
+    profile.write_text(sized_profile(case).replace('</profiles>', THROTTLED_WRITER % THROTTLE))
     # rmw_fastrtps makes every writer synchronous unless told otherwise.
     return dict(env, FASTRTPS_DEFAULT_PROFILES_FILE=str(profile),
                 RMW_FASTRTPS_PUBLICATION_MODE='ASYNCHRONOUS')
 
 
-def case_env(base, case, domain):
+def case_env(base, case, domain, workdir):
     env = dict(base)
     env['ROS_DOMAIN_ID'] = str(domain)
     if case['netns']:
@@ -353,7 +363,9 @@ def case_env(base, case, domain):
         env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     env['PYTHONPATH'] = str(BENCH) + os.pathsep + env.get('PYTHONPATH', '')
     if case['transport'] == 'tuned':
-        env['FASTRTPS_DEFAULT_PROFILES_FILE'] = str(PROFILE)
+        profile = workdir / 'tuned.xml'
+        profile.write_text(sized_profile(case))
+        env['FASTRTPS_DEFAULT_PROFILES_FILE'] = str(profile)
     # 'default' and 'packaged': no profile variable; py_vision's nodes then load their own.
     return env
 
@@ -361,7 +373,7 @@ def case_env(base, case, domain):
 def run_case(case, base_env, domain, duration, settle, python, log=print):
     """Run one case; return its measurements (or an 'error')."""
     workdir = Path(tempfile.mkdtemp(prefix='pyv_bench_'))
-    env = case_env(base_env, case, domain)
+    env = case_env(base_env, case, domain, workdir)
     pub_cmd, sub_cmd = commands(case, python)
     pub_ns = NETNS[0] if case['netns'] else None
     sub_ns = NETNS[1] if case['netns'] else None
@@ -521,8 +533,8 @@ def table(results):
                 r['group'], where, r['transport'], r['reliability'], r['width'], r['height'],
                 r['fps'], 'failed: ' + r['error']))
             continue
-        lines.append('| %s%s | %s | %s | %dx%d | %g | %s | %s | %s | %s | %s | %s | %s | %s | %s | '
-                     '%s |'
+        lines.append('| %s%s | %s | %s | %dx%d | %g | %s | %s | %s | %s | %s | %s | %s | %s | '
+                     '%s | %s |'
                      % (r['group'], where, r['transport'], r['reliability'], r['width'],
                         r['height'], r['fps'], fmt(r['published_fps']),
                         fmt(r['delivered_fps']), fmt(r['delivered_pct'], 2), fmt(r['lost']),
