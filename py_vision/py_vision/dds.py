@@ -60,7 +60,7 @@ SMALL_SEGMENT = 512 * 1024
 # Frames in flight a publisher's segment holds (bench/bench_pipeline.py measured it; see
 # docs/dds.md), and the size assumed when the node's frame size cannot be read.
 SEGMENT_FRAMES = 3
-DEFAULT_SIZE = (640, 480)
+DEFAULT_SIZE = (640, 480)  # usbcam_publisher's image_width, image_height defaults
 SAFE_SIZE = (1920, 1080)
 BYTES_PER_PIXEL = 3
 
@@ -99,7 +99,7 @@ def _ros_arguments(args):
 
 def _params_file_size(path, node_name):
     """Return {name: value} of image_width/image_height for node_name in a parameter file."""
-    import yaml
+    import yaml  # only when a file is given: PyYAML is optional on the boards
     with open(path) as stream:
         content = yaml.safe_load(stream)
     wildcard, own = {}, {}
