@@ -17,8 +17,9 @@ Localhost only means localhost: frames reach subscribers on this host and no oth
 
 Two "hosts" are two network namespaces joined by a veth pair. The board runs usbcam_publisher
 and a subscriber on the same host (sharing its /dev/shm); the PC runs a subscriber with Fast
-DDS' defaults, discovering by multicast as any PC on the LAN does. With the user's
-localhost-only setting the board's subscriber gets every frame, intact, and the PC none.
+DDS' defaults, discovering by multicast as any PC on the LAN does and also asking the board's
+address directly (ROS_STATIC_PEERS). With the user's localhost-only setting the board's
+subscriber gets every frame, intact, and the PC none.
 """
 
 import json
@@ -158,6 +159,12 @@ def board_env(ros_env, setting):
     return env
 
 
+def pc_env(hosts, ros_env):
+    """Return the PC's environment: multicast discovery, and the board's address to try too."""
+    return dict(ros_env, ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET',
+                ROS_STATIC_PEERS=hosts.addr['board'])
+
+
 def start_publisher(hosts, env):
     publisher = hosts.start('board', 'usbcam_publisher', [
         str(ros_harness.EXECUTABLES / 'usbcam_publisher'), '--ros-args',
@@ -178,8 +185,7 @@ def receives_nothing(proc):
 def test_localhost_only_keeps_frames_on_this_host(hosts, ros_env, case):
     setting, pc_receives = CASES[case]
     env = board_env(ros_env, setting)
-    pc_env = dict(ros_env, ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET')
-    pc = hosts.start('pc', 'pc_subscriber', [sys.executable, CHECKER, '1'], pc_env)
+    pc = hosts.start('pc', 'pc_subscriber', [sys.executable, CHECKER, '1'], pc_env(hosts, ros_env))
     same_host = hosts.start('board', 'board_subscriber',
                             [sys.executable, CHECKER, str(SAME_HOST_FRAMES)], env)
     start_publisher(hosts, env)
@@ -201,8 +207,7 @@ def test_localhost_only_keeps_frames_on_this_host(hosts, ros_env, case):
 def test_discovery_off_keeps_frames_in_the_process(hosts, ros_env):
     """OFF is stricter than localhost: ROS discovers no other process, on any host."""
     env = board_env(ros_env, {'ROS_AUTOMATIC_DISCOVERY_RANGE': 'OFF'})
-    pc = hosts.start('pc', 'pc_subscriber', [sys.executable, CHECKER, '1'],
-                     dict(ros_env, ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET'))
+    pc = hosts.start('pc', 'pc_subscriber', [sys.executable, CHECKER, '1'], pc_env(hosts, ros_env))
     same_host = hosts.start('board', 'board_subscriber', [sys.executable, CHECKER, '1'],
                             dict(ros_env, ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST'))
     publisher = start_publisher(hosts, env)
