@@ -53,7 +53,7 @@ _KERNEL_LIMITS = {
 # the segment has to be sized and parameters do not exist yet.
 NO_IMAGES = 'no images'
 OWN_SIZE = 'images of its image_width x image_height parameters'
-INPUT_SIZE = 'images as large as those it receives (told by image_width, image_height)'
+INPUT_SIZE = 'images as large as those it receives (the camera node size, if known)'
 
 # Fast DDS' own default segment: enough for everything but images.
 SMALL_SEGMENT = 512 * 1024
@@ -61,6 +61,8 @@ SMALL_SEGMENT = 512 * 1024
 # docs/dds.md), and the size assumed when the node's frame size cannot be read.
 SEGMENT_FRAMES = 3
 DEFAULT_SIZE = (640, 480)  # usbcam_publisher's image_width, image_height defaults
+# The camera node, whose entry in a shared parameter file tells the others the frame size.
+CAMERA_NODE = 'usbcam_publisher'
 SAFE_SIZE = (1920, 1080)
 BYTES_PER_PIXEL = 3
 
@@ -97,36 +99,43 @@ def _ros_arguments(args):
             yield arg
 
 
-def _params_file_size(path, node_name):
-    """Return {name: value} of image_width/image_height for node_name in a parameter file."""
+def _params_file_size(path, node_names):
+    """
+    Return {name: value} of image_width/image_height in a parameter file.
+
+    From its wildcard entries, then those of node_names in turn, each more specific than the
+    ones before.
+    """
     import yaml  # only when a file is given: PyYAML is optional on the boards
     with open(path) as stream:
         content = yaml.safe_load(stream)
-    wildcard, own = {}, {}
+    found = {name: {} for name in ('**',) + tuple(node_names)}
 
     def visit(tree, names):
         for key, value in tree.items():
             if key == 'ros__parameters' and isinstance(value, dict):
-                name = '/'.join(names).strip('/')
-                sizes = {k: v for k, v in value.items() if k in ('image_width', 'image_height')}
-                if name == node_name or name.endswith('/' + node_name):
-                    own.update(sizes)
-                elif name.split('/')[-1] in ('*', '**'):
-                    wildcard.update(sizes)
+                name = names[-1] if names else ''
+                name = '**' if name in ('*', '**') else name
+                if name in found:
+                    found[name].update({k: v for k, v in value.items()
+                                        if k in ('image_width', 'image_height')})
             elif isinstance(value, dict):
-                visit(value, names + [str(key)])
+                visit(value, names + [str(key).rsplit('/', 1)[-1]])
     visit(content, [])
-    # The node's own entry is more specific than a wildcard one.
-    return dict(wildcard, **own)
+    sizes = {}
+    for entry in found.values():
+        sizes.update(entry)
+    return sizes
 
 
-def requested_size(args, node_name, default=DEFAULT_SIZE):
+def requested_size(args, node_name, default=DEFAULT_SIZE, file_entries=()):
     """
     Return the (width, height) a node's command line asks for, read without rclpy.
 
     From `-p image_width:=W -p image_height:=H` and `--params-file FILE` (the command line
-    wins, as in rcl); default where neither says; SAFE_SIZE when a value or a file cannot be
-    read, so a misread never makes the segment too small.
+    wins, as in rcl; in a file the node's own entry, then those of file_entries, then `/**`);
+    default where neither says; SAFE_SIZE when a value or a file cannot be read, so a misread
+    never makes the segment too small.
     """
     values = {}
     given = {}
@@ -134,7 +143,7 @@ def requested_size(args, node_name, default=DEFAULT_SIZE):
     try:
         for flag, value in zip(ros_args, ros_args[1:]):
             if flag == '--params-file':
-                values.update(_params_file_size(value, node_name))
+                values.update(_params_file_size(value, tuple(file_entries) + (node_name,)))
         for flag, value in zip(ros_args, ros_args[1:]):
             if flag in ('-p', '--param') and ':=' in value:
                 name, text = value.split(':=', 1)
@@ -156,8 +165,9 @@ def segment_size(publishes, args=(), node_name=''):
     if publishes == OWN_SIZE:
         width, height = requested_size(args, node_name)
     elif publishes == INPUT_SIZE:
-        # It cannot know what it will receive unless told the same size as the camera.
-        width, height = requested_size(args, node_name, SAFE_SIZE)
+        # It cannot know what it will receive unless told: by its own image_width and
+        # image_height, or by the camera node's entry in the parameter file they share.
+        width, height = requested_size(args, node_name, SAFE_SIZE, (CAMERA_NODE,))
     else:
         width, height = SAFE_SIZE
     return max(SMALL_SEGMENT, SEGMENT_FRAMES * width * height * BYTES_PER_PIXEL)

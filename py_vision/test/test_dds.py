@@ -102,6 +102,10 @@ def test_frame_size_from_a_parameter_file(tmp_path):
     args = ['--ros-args', '--params-file', str(params)]
     assert dds.requested_size(args, 'usbcam_publisher') == (1280, 720)
     assert dds.requested_size(args, 'cv_bridge_test') == (640, 960)
+    # A node that republishes the camera's frames reads the camera's entry in a shared file,
+    # as pipeline.launch.py gives params.yaml to every node.
+    assert dds.segment_size(dds.INPUT_SIZE, args, 'cv_bridge_test') == \
+        dds.segment_size(dds.OWN_SIZE, args, 'usbcam_publisher')
     # The command line wins over the file, as in rcl.
     assert dds.requested_size(args + ['-p', 'image_width:=320'], 'usbcam_publisher') == (
         320, 720)
