@@ -21,10 +21,15 @@ One command, every case in separate processes, one after the other:
 
 Cases (``--cases`` takes group names or substrings of case names):
   ref-default   bare rclpy publisher -> bare subscriber, Fast DDS defaults (no XML profile)
-  ref-tuned     the same with FASTRTPS_DEFAULT_PROFILES_FILE = py_vision's installed profile
+  ref-tuned     the same with FASTRTPS_DEFAULT_PROFILES_FILE = py_vision's installed profile,
+                its shared memory sized for three frames as py_vision's publisher sizes it
   pyv-pyv       usbcam_publisher (synthetic source) -> usbcam_subscriber (display:=none)
   pyv-bare      usbcam_publisher (synthetic source) -> bare subscriber
-  netns         the same pairs between two network namespaces joined by a veth pair (root only)
+  pyv-bare-throttled  the same, the publisher with a throughput controller (see THROTTLE)
+  netns         ref-default, ref-tuned, pyv-pyv and pyv-bare between two network namespaces
+                joined by a veth pair (root only), and pyv-bare-throttled: the publisher with
+                the packaged profile plus a throughput controller (THROTTLE), a default
+                subscriber; the subscriber namespace's UDP receive-buffer drops are counted
 each at 640x480, 1280x720 and 1920x1080, at 30 fps and a high rate, with a best-effort and a
 reliable subscriber.
 
@@ -39,6 +44,7 @@ import argparse
 import json
 import os
 from pathlib import Path
+import re
 import shutil
 import signal
 import subprocess
@@ -220,6 +226,16 @@ def netns_setup():
     return None
 
 
+def receive_buffer_errors():
+    """UDP datagrams the subscriber's namespace dropped for a full socket buffer, so far."""
+    out = subprocess.run(['ip', 'netns', 'exec', NETNS[1], 'cat', '/proc/net/snmp'],
+                         capture_output=True, text=True).stdout
+    rows = [line.split() for line in out.splitlines() if line.startswith('Udp:')]
+    if len(rows) < 2:
+        return None
+    return int(dict(zip(rows[0][1:], rows[1][1:])).get('RcvbufErrors', 0))
+
+
 def veth_tx_bytes():
     """Bytes the publisher's veth end has sent so far."""
     out = subprocess.run(['ip', 'netns', 'exec', NETNS[0], 'cat',
@@ -253,9 +269,18 @@ def all_cases(quick):
             for fps in (30.0, HIGH_RATE[size]):
                 for rel in RELIABILITIES:
                     cases.append(make_case(group, pub, sub, transport, rel, size, fps))
+    # The throttled publisher on one host: what pacing costs where there is no network.
+    for rel in RELIABILITIES:
+        cases.append(make_case('pyv-bare-throttled', 'pyv', 'bare', 'throttled', rel, SIZES[0],
+                               30.0))
+    # pyv-bare across hosts: py_vision's publisher and a subscriber with Fast DDS' defaults,
+    # e.g. rqt_image_view or the user's own node on a PC.
     for group, pub, sub, transport in (('netns ref-default', 'bare', 'bare', 'default'),
                                        ('netns ref-tuned', 'bare', 'bare', 'tuned'),
-                                       ('netns pyv-pyv', 'pyv', 'pyv', 'packaged')):
+                                       ('netns pyv-pyv', 'pyv', 'pyv', 'packaged'),
+                                       ('netns pyv-bare', 'pyv', 'bare', 'packaged'),
+                                       ('netns pyv-bare-throttled', 'pyv', 'bare',
+                                        'throttled')):
         for rel in RELIABILITIES:
             cases.append(make_case(group, pub, sub, transport, rel, SIZES[0], NETNS_FPS,
                                    netns=True))
@@ -295,7 +320,40 @@ def commands(case, python):
     return pub, sub
 
 
-def case_env(base, case, domain):
+# The publisher-side remedy tried for the default subscriber's losses across hosts: Fast DDS
+# 2.x's throughput controller (XML in 2.6 and 2.14; named flow controllers only from 3.0) on
+# an asynchronous writer. It paces every transport of the writer, shared memory included.
+THROTTLE = (65536, 1)  # bytes per period, period in ms
+THROTTLED_WRITER = (
+    '  <data_writer profile_name="py_vision_throttled" is_default_profile="true">\n'
+    '    <qos><publishMode><kind>ASYNCHRONOUS</kind></publishMode></qos>\n'
+    '    <throughputController>\n'
+    '      <bytesPerPeriod>%d</bytesPerPeriod>\n'
+    '      <periodMillisecs>%d</periodMillisecs>\n'
+    '    </throughputController>\n'
+    '  </data_writer>\n'
+    '</profiles>')
+
+
+def sized_profile(case):
+    """Return the installed profile's text with shared memory for three of the case's frames."""
+    # As py_vision's publisher sizes its own (py_vision/dds.py); the file holds VGA's.
+    return re.sub(r'<segment_size>\d+</segment_size>', '<segment_size>%d</segment_size>' % (
+        3 * case['width'] * case['height'] * 3), PROFILE.read_text())
+
+
+def publisher_env(env, case, workdir):
+    """Return the publisher's environment: the subscriber's, or the throttled profile's."""
+    if case['transport'] != 'throttled':
+        return env
+    profile = workdir / 'throttled.xml'
+    profile.write_text(sized_profile(case).replace('</profiles>', THROTTLED_WRITER % THROTTLE))
+    # rmw_fastrtps makes every writer synchronous unless told otherwise.
+    return dict(env, FASTRTPS_DEFAULT_PROFILES_FILE=str(profile),
+                RMW_FASTRTPS_PUBLICATION_MODE='ASYNCHRONOUS')
+
+
+def case_env(base, case, domain, workdir):
     env = dict(base)
     env['ROS_DOMAIN_ID'] = str(domain)
     if case['netns']:
@@ -305,7 +363,9 @@ def case_env(base, case, domain):
         env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     env['PYTHONPATH'] = str(BENCH) + os.pathsep + env.get('PYTHONPATH', '')
     if case['transport'] == 'tuned':
-        env['FASTRTPS_DEFAULT_PROFILES_FILE'] = str(PROFILE)
+        profile = workdir / 'tuned.xml'
+        profile.write_text(sized_profile(case))
+        env['FASTRTPS_DEFAULT_PROFILES_FILE'] = str(profile)
     # 'default' and 'packaged': no profile variable; py_vision's nodes then load their own.
     return env
 
@@ -313,13 +373,13 @@ def case_env(base, case, domain):
 def run_case(case, base_env, domain, duration, settle, python, log=print):
     """Run one case; return its measurements (or an 'error')."""
     workdir = Path(tempfile.mkdtemp(prefix='pyv_bench_'))
-    env = case_env(base_env, case, domain)
+    env = case_env(base_env, case, domain, workdir)
     pub_cmd, sub_cmd = commands(case, python)
     pub_ns = NETNS[0] if case['netns'] else None
     sub_ns = NETNS[1] if case['netns'] else None
     result = dict(case)
     sub = Proc('subscriber', sub_cmd, env, workdir, sub_ns)
-    pub = Proc('publisher', pub_cmd, env, workdir, pub_ns)
+    pub = Proc('publisher', pub_cmd, publisher_env(env, case, workdir), workdir, pub_ns)
     try:
         if not wait_for(lambda: FIRST_FRAME_MARK in sub.output()
                         or sub.proc.poll() is not None or pub.proc.poll() is not None, 40):
@@ -333,12 +393,16 @@ def run_case(case, base_env, domain, duration, settle, python, log=print):
             cpu0 = [cpu_ticks(pid) for pid in pids]
             m0 = machine_ticks()
             tx0 = veth_tx_bytes() if case['netns'] else None
+            drops0 = receive_buffer_errors() if case['netns'] else None
             time.sleep(duration)  # the measurement window itself
             t1 = time.monotonic()
             cpu1 = [cpu_ticks(pid) for pid in pids]
             m1 = machine_ticks()
             tx1 = veth_tx_bytes() if case['netns'] else None
+            drops1 = receive_buffer_errors() if case['netns'] else None
             result.update(window=(t0, t1), cpu0=cpu0, cpu1=cpu1, machine=(m0, m1),
+                          receive_buffer_drops=(drops1 - drops0) if drops0 is not None
+                          and drops1 is not None else None,
                           veth_bytes=(tx1 - tx0) if tx0 is not None and tx1 is not None
                           else None)
     finally:
@@ -412,7 +476,7 @@ def analyse(result, published, received):
 # ----------------------------------------------------------------------------- aggregation
 
 NUMERIC = ('published_fps', 'delivered_fps', 'delivered_pct', 'lost', 'p50_ms', 'p99_ms',
-           'pub_cpu_pct', 'sub_cpu_pct', 'machine_busy_pct')
+           'pub_cpu_pct', 'sub_cpu_pct', 'machine_busy_pct', 'receive_buffer_drops')
 
 
 def median(values):
@@ -460,8 +524,8 @@ def fmt(value, digits=1):
 def table(results):
     lines = ['| case | transport | reliability | size | target fps | published fps | '
              'delivered fps | delivered % | lost | p50 ms | p99 ms | pub CPU% | sub CPU% | '
-             'p50 vs tuned ref |',
-             '|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|']
+             'p50 vs tuned ref | UDP receive buffer drops |',
+             '|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|']
     for r in results:
         where = ' (2 hosts)' if r['netns'] else ''
         if 'error' in r and 'delivered' not in r:
@@ -469,13 +533,15 @@ def table(results):
                 r['group'], where, r['transport'], r['reliability'], r['width'], r['height'],
                 r['fps'], 'failed: ' + r['error']))
             continue
-        lines.append('| %s%s | %s | %s | %dx%d | %g | %s | %s | %s | %s | %s | %s | %s | %s | %s |'
+        lines.append('| %s%s | %s | %s | %dx%d | %g | %s | %s | %s | %s | %s | %s | %s | %s | '
+                     '%s | %s |'
                      % (r['group'], where, r['transport'], r['reliability'], r['width'],
                         r['height'], r['fps'], fmt(r['published_fps']),
                         fmt(r['delivered_fps']), fmt(r['delivered_pct'], 2), fmt(r['lost']),
                         fmt(r['p50_ms'], 2), fmt(r['p99_ms'], 2), fmt(r['pub_cpu_pct']),
                         fmt(r['sub_cpu_pct']),
-                        fmt(r['p50_ratio'], 2) if r.get('p50_ratio') else '-'))
+                        fmt(r['p50_ratio'], 2) if r.get('p50_ratio') else '-',
+                        fmt(r.get('receive_buffer_drops'))))
     return '\n'.join(lines)
 
 

@@ -34,6 +34,7 @@ from typing import Callable, Optional
 
 import cv2
 import numpy as np
+from py_vision import dds
 from py_vision.cv_bridge import CvBridge, CvBridgeError
 from py_vision.display import Display, DISPLAYS
 from py_vision.latest_frame import LatestFrameWorker
@@ -98,6 +99,7 @@ class ProcessingStats:
 
 class CvBridgeTest(Node):
     NODE_NAME = 'cv_bridge_test'
+    PUBLISHES = dds.INPUT_SIZE
     SUMMARY = ('Draws a red circle on every frame of usb_camera/image and publishes it on '
                'cv_bridge_image, always working on the newest frame.')
     PARAMETERS = viewer_specs('none', DISPLAYS) + (

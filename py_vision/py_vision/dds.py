@@ -15,31 +15,56 @@
 """
 Use the Fast DDS profile shipped with py_vision unless the user chose their own.
 
-Fast DDS' default shared-memory segment (0.5 MB) is smaller than one VGA frame, so images
-fall back to fragmented UDP and best-effort subscribers lose many of them. The packaged
-profile (config/fastdds_image_profile.xml) gives shared memory room for frames and enlarges the
-UDP socket buffers for other hosts.
+The packaged profile (config/fastdds_image_profile.xml) lists a shared-memory transport for
+this host and a UDPv4 transport for other hosts. Each node gets a copy of it, written to the
+temporary directory and named after its content, tailored to the node:
 
-Fast DDS drops its whole UDP transport, silently, when a socket buffer larger than the
-kernel allows (net.core.wmem_max / rmem_max) is requested, and with it every peer on another
-host. So the buffer sizes are capped at the limits of the machine (and network namespace) the
-node starts on, in a copy of the profile written to the temporary directory.
+- Shared memory sized to what the node itself publishes. Every participant maps its whole
+  segment at start-up (real RAM on Fast DDS 2.6 and 2.14), and a subscriber's segment only
+  ever carries small messages: the frames it receives are read from the publisher's segment.
+  So a node that publishes no images keeps Fast DDS' default size, and one that does gets
+  room for a few of its frames in flight, not one fixed size for every node.
+- Localhost only when the user asked for it (ROS_LOCALHOST_ONLY=1 on Humble,
+  ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST or OFF from Iron on): the UDP transport is then
+  restricted to 127.0.0.1. Humble's rmw_fastrtps only adds a localhost transport beside the
+  profile's own, so without this the profile's UDP would stay open to the network.
+- Socket buffers no larger than the kernel allows (net.core.wmem_max / rmem_max): Fast DDS
+  drops its whole UDP transport, silently, when a buffer above the limit is requested, and
+  with it every peer on another host.
 """
 
-import hashlib
 import os
-import re
-import tempfile
+import sys
+import xml.etree.ElementTree as ET
+import zlib
 
 from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
 
 PROFILE_NAME = 'fastdds_image_profile.xml'
+NS = 'http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles'
 _USER_SETTINGS = ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE')
 _FAST_DDS_RMWS = ('', 'rmw_fastrtps_cpp', 'rmw_fastrtps_dynamic_cpp')
 _KERNEL_LIMITS = {
     'sendBufferSize': '/proc/sys/net/core/wmem_max',
     'receiveBufferSize': '/proc/sys/net/core/rmem_max',
 }
+
+# What a node publishes, stated by its class (PUBLISHES) and read before rclpy.init(), when
+# the segment has to be sized and parameters do not exist yet.
+NO_IMAGES = 'no images'
+OWN_SIZE = 'images of its image_width x image_height parameters'
+INPUT_SIZE = 'images as large as those it receives (the camera node size, if known)'
+
+# Fast DDS' own default segment: enough for everything but images.
+SMALL_SEGMENT = 512 * 1024
+# Frames in flight a publisher's segment holds (bench/bench_pipeline.py measured it; see
+# docs/dds.md), and the size assumed when the node's frame size cannot be read.
+SEGMENT_FRAMES = 3
+DEFAULT_SIZE = (640, 480)  # usbcam_publisher's image_width, image_height defaults
+# The camera node, whose entry in a shared parameter file tells the others the frame size.
+CAMERA_NODE = 'usbcam_publisher'
+SAFE_SIZE = (1920, 1080)
+BYTES_PER_PIXEL = 3
 
 
 def packaged_profile():
@@ -55,6 +80,99 @@ def packaged_profile():
     return path if os.path.isfile(path) else None
 
 
+def localhost_only(environ=os.environ):
+    """Return True when the user asked for ROS traffic on this host only (either variable)."""
+    # On Jazzy ROS_LOCALHOST_ONLY=1 overrides the discovery range too; OFF is stricter still.
+    return (environ.get('ROS_LOCALHOST_ONLY') == '1'
+            or environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE') in ('LOCALHOST', 'OFF'))
+
+
+def _ros_arguments(args):
+    """Yield the arguments between --ros-args and its closing --, as rcl reads them."""
+    inside = False
+    for arg in args:
+        if arg == '--ros-args':
+            inside = True
+        elif arg == '--':
+            inside = False
+        elif inside:
+            yield arg
+
+
+def _params_file_size(path, node_names):
+    """
+    Return {name: value} of image_width/image_height in a parameter file.
+
+    From its wildcard entries, then those of node_names in turn, each more specific than the
+    ones before.
+    """
+    import yaml  # only when a file is given: PyYAML is optional on the boards
+    with open(path) as stream:
+        content = yaml.safe_load(stream)
+    found = {name: {} for name in ('**',) + tuple(node_names)}
+
+    def visit(tree, names):
+        for key, value in tree.items():
+            if key == 'ros__parameters' and isinstance(value, dict):
+                name = names[-1] if names else ''
+                name = '**' if name in ('*', '**') else name
+                if name in found:
+                    found[name].update({k: v for k, v in value.items()
+                                        if k in ('image_width', 'image_height')})
+            elif isinstance(value, dict):
+                visit(value, names + [str(key).rsplit('/', 1)[-1]])
+    visit(content, [])
+    sizes = {}
+    for entry in found.values():
+        sizes.update(entry)
+    return sizes
+
+
+def requested_size(args, node_name, default=DEFAULT_SIZE, file_entries=()):
+    """
+    Return the (width, height) a node's command line asks for, read without rclpy.
+
+    From `-p image_width:=W -p image_height:=H` and `--params-file FILE` (the command line
+    wins, as in rcl; in a file the node's own entry, then those of file_entries, then `/**`);
+    default where neither says; SAFE_SIZE when a value or a file cannot be read, so a misread
+    never makes the segment too small.
+    """
+    values = {}
+    given = {}
+    ros_args = list(_ros_arguments(args))
+    try:
+        for flag, value in zip(ros_args, ros_args[1:]):
+            if flag == '--params-file':
+                values.update(_params_file_size(value, tuple(file_entries) + (node_name,)))
+        for flag, value in zip(ros_args, ros_args[1:]):
+            if flag in ('-p', '--param') and ':=' in value:
+                name, text = value.split(':=', 1)
+                name = name.rsplit(':', 1)[-1]
+                if name in ('image_width', 'image_height'):
+                    given[name] = text
+        values.update({name: int(text) for name, text in given.items()})
+        size = (int(values.get('image_width', default[0])),
+                int(values.get('image_height', default[1])))
+    except Exception:  # a light read: anything unexpected means "assume large frames"
+        return SAFE_SIZE
+    return size if min(size) > 0 else SAFE_SIZE
+
+
+def segment_size(publishes, args=(), node_name=''):
+    """Return the shared-memory segment, in bytes, for a node that publishes `publishes`."""
+    if publishes == NO_IMAGES:
+        return SMALL_SEGMENT
+    if publishes == OWN_SIZE:
+        width, height = requested_size(args, node_name)
+    elif publishes == INPUT_SIZE:
+        # It cannot know what it will receive unless told: by its own image_width and
+        # image_height, or by the camera node's entry in the parameter file they share.
+        width, height = requested_size(args, node_name, SAFE_SIZE, (CAMERA_NODE,))
+    else:
+        width, height = SAFE_SIZE
+    return max(SMALL_SEGMENT, SEGMENT_FRAMES * width * height * BYTES_PER_PIXEL)
+
+
 def _kernel_limit(path):
     try:
         with open(path) as limit:
@@ -63,46 +181,78 @@ def _kernel_limit(path):
         return None
 
 
-def fit_to_kernel(profile, limits=None):
+def tailor(profile, segment=None, localhost=False, limits=None):
     """
-    Return the path of a profile whose socket buffers the kernel accepts.
+    Return the path of a copy of profile tailored to one node, or profile itself if unchanged.
 
-    That is profile itself when its buffer sizes are within the limits (by default read from
-    /proc/sys/net/core), else a capped copy in the temporary directory.
+    segment: the shared-memory segment size in bytes (None: as in profile); localhost: restrict
+    UDP to 127.0.0.1; limits: the kernel's socket buffer limits by element name (by default
+    read from /proc/sys/net/core), to which the buffer sizes are capped.
     """
     if limits is None:
         limits = {tag: _kernel_limit(path) for tag, path in _KERNEL_LIMITS.items()}
-    with open(profile) as source:
-        text = source.read()
-
-    def cap(match):
-        limit = limits.get(match.group(1))
-        size = int(match.group(2))
-        if limit is not None and size > limit:
-            size = limit
-        return '<%s>%d</%s>' % (match.group(1), size, match.group(1))
-    fitted = re.sub(r'<(sendBufferSize|receiveBufferSize)>(\d+)</\1>', cap, text)
-    if fitted == text:
+    ET.register_namespace('', NS)
+    tree = ET.parse(profile)
+    q = '{%s}%%s' % NS
+    changed = False
+    for descriptor in tree.getroot().iter(q % 'transport_descriptor'):
+        kind = descriptor.find(q % 'type').text.strip()
+        if kind == 'SHM' and segment is not None:
+            element = descriptor.find(q % 'segment_size')
+            if int(element.text) != segment:
+                element.text = str(segment)
+                changed = True
+        if kind != 'UDPv4':
+            continue
+        for tag, limit in limits.items():
+            element = descriptor.find(q % tag)
+            if element is not None and limit is not None and int(element.text) > limit:
+                element.text = str(limit)
+                changed = True
+        if localhost:
+            allowed = ET.Element(q % 'interfaceWhiteList')
+            ET.SubElement(allowed, q % 'address').text = '127.0.0.1'
+            # Fast DDS' schema wants it right after <type>.
+            descriptor.insert(list(descriptor).index(descriptor.find(q % 'type')) + 1, allowed)
+            changed = True
+    if not changed:
         return profile
-    # Named after its content, so an upgraded profile never meets a stale copy; a file of
-    # another user's is never trusted.
-    digest = hashlib.sha256(fitted.encode()).hexdigest()[:16]
-    path = os.path.join(tempfile.gettempdir(), 'py_vision_fastdds_%d_%s.xml' % (
-        os.getuid(), digest))
-    if not (os.path.isfile(path) and os.stat(path).st_uid == os.getuid()):
-        handle, partial = tempfile.mkstemp(dir=os.path.dirname(path), suffix='.xml')
-        with os.fdopen(handle, 'w') as out:
+    fitted = '<?xml version="1.0" encoding="UTF-8"?>\n%s\n' % ET.tostring(
+        tree.getroot(), encoding='unicode')
+    # Named after its content, so an upgraded profile rarely meets a stale copy, and checked
+    # anyway; a file of another user's is never trusted. (zlib, not hashlib: OpenSSL would add
+    # 4 MB to every node.)
+    path = os.path.join(os.environ.get('TMPDIR') or '/tmp', 'py_vision_fastdds_%d_%08x.xml' % (
+        os.getuid(), zlib.crc32(fitted.encode())))
+    if not _holds(path, fitted):
+        partial = '%s.%d' % (path, os.getpid())
+        if os.path.lexists(partial):  # left by a killed process that had this pid
+            os.unlink(partial)
+        # Created here, never an existing file or link in the shared directory.
+        with os.fdopen(os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644), 'w') as out:
             out.write(fitted)
-        os.chmod(partial, 0o644)
         os.replace(partial, path)
     return path
 
 
-def use_packaged_profile(environ=os.environ):
-    """
-    Point Fast DDS at the packaged profile; return the path used, or None if left alone.
+def _holds(path, text):
+    """Return True if path is this user's file and holds text."""
+    try:
+        if os.stat(path).st_uid != os.getuid():
+            return False
+        with open(path) as existing:
+            return existing.read() == text
+    except OSError:
+        return False
 
-    Left alone: another RMW is selected, the user set a profile file, or Fast DDS would
+
+def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.environ):
+    """
+    Point Fast DDS at the packaged profile tailored to a node; return its path, or None.
+
+    publishes: NO_IMAGES, OWN_SIZE or INPUT_SIZE (None: large images, SAFE_SIZE); args: the
+    node's command line (default sys.argv), where OWN_SIZE and INPUT_SIZE read the frame size.
+    Left alone (None): another RMW is selected, the user set a profile file, or Fast DDS would
     load DEFAULT_FASTRTPS_PROFILES.xml from the working directory.
     """
     if environ.get('RMW_IMPLEMENTATION', '') not in _FAST_DDS_RMWS:
@@ -113,6 +263,7 @@ def use_packaged_profile(environ=os.environ):
         return None
     path = packaged_profile()
     if path is not None:
-        path = fit_to_kernel(path)
+        segment = segment_size(publishes, sys.argv if args is None else args, node_name)
+        path = tailor(path, segment, localhost_only(environ))
         environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = path
     return path

@@ -111,7 +111,8 @@ def run(node_class, args=None):
     """
     Build node_class() and spin it until Ctrl-C, SIGTERM or rclpy shutdown; return the status.
 
-    node_class has NODE_NAME, PARAMETERS (a tuple of params.Spec) and SUMMARY for --help; it
+    node_class has NODE_NAME, PARAMETERS (a tuple of params.Spec) and SUMMARY for --help, and
+    PUBLISHES (what it publishes, see dds.segment_size); it
     raises ConfigError for problems the user has to fix, has a close() that releases what it
     holds (threads, devices, sockets) and copes with a half-built node, and sets `failed` when
     it stops because of an error.
@@ -122,7 +123,8 @@ def run(node_class, args=None):
                                    node_class.SUMMARY))
         return 0
     install_quiet_signals()
-    dds.use_packaged_profile()
+    # The shared-memory segment is sized to what the node publishes, before parameters exist.
+    dds.use_packaged_profile(node_class.PUBLISHES, argv, node_class.NODE_NAME)
     error = _init_rclpy(argv)
     if error is not None:
         if _Stopping.requested:

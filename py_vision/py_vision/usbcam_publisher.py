@@ -28,6 +28,7 @@ import threading
 import time
 
 import cv2
+from py_vision import dds
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
 from py_vision.camera import Camera, CONTROL_NAMES, PIXEL_FORMATS, SourceError
 from py_vision.cv_bridge import CvBridge
@@ -76,6 +77,7 @@ _CONTROL_SPECS = (
 
 class USBImagePublisher(Node):
     NODE_NAME = 'usbcam_publisher'
+    PUBLISHES = dds.OWN_SIZE
     SUMMARY = ('Publishes a USB camera (or a video file, or the built-in synthetic camera) as '
                'sensor_msgs/Image on usb_camera/image, JPEG on usb_camera/image/compressed '
                'and CameraInfo on usb_camera/camera_info.')

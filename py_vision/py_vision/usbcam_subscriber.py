@@ -24,6 +24,7 @@ viewer forwards the JPEG bytes it receives without decoding them.
 
 import cv2
 import numpy as np
+from py_vision import dds
 from py_vision.cv_bridge import CvBridge, CvBridgeError, cvtColorForDisplay
 from py_vision.display import Display, DISPLAYS
 from py_vision.node_main import main_for
@@ -39,6 +40,7 @@ IMAGE_TOPIC = 'usb_camera/image'
 
 class VideoSubscriber(Node):
     NODE_NAME = 'usbcam_subscriber'
+    PUBLISHES = dds.NO_IMAGES
     SUMMARY = ('Shows the frames of usb_camera/image (remap it to watch another topic) in an '
                'OpenCV window or a browser, and logs their rate and latency.')
     PARAMETERS = viewer_specs('auto', DISPLAYS) + (

@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The packaged Fast DDS profile: used by default, never over a user's choice, kernel-safe."""
+"""The packaged Fast DDS profile: used by default, never over a user's choice, fit to the node."""
 
 from pathlib import Path
 import xml.etree.ElementTree as ET
@@ -20,53 +20,120 @@ import xml.etree.ElementTree as ET
 from py_vision import dds
 
 NS = '{http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles}'
+VGA_BYTES = 640 * 480 * 3
+LIMITS = {'sendBufferSize': '/proc/sys/net/core/wmem_max',
+          'receiveBufferSize': '/proc/sys/net/core/rmem_max'}
+
+
+def udp(path):
+    root = ET.parse(path).getroot()
+    for descriptor in root.iter(NS + 'transport_descriptor'):
+        if descriptor.find(NS + 'type').text == 'UDPv4':
+            return descriptor
 
 
 def buffer_sizes(path):
-    root = ET.parse(path).getroot()
-    return {tag: int(root.find('.//%s%s' % (NS, tag)).text)
-            for tag in ('sendBufferSize', 'receiveBufferSize')}
+    return {tag: int(udp(path).find(NS + tag).text) for tag in LIMITS}
 
 
-def without_buffer_sizes(path):
-    root = ET.parse(path).getroot()
-    for tag in ('sendBufferSize', 'receiveBufferSize'):
-        root.find('.//%s%s' % (NS, tag)).text = ''
-    return ET.tostring(root)
+def segment(path):
+    return int(ET.parse(path).getroot().find('.//%ssegment_size' % NS).text)
 
 
-def test_installed_profile_gives_shared_memory_room_for_frames():
+def allowed_interfaces(path):
+    return [a.text for a in udp(path).iter(NS + 'address')]
+
+
+def test_installed_profile_has_shared_memory_and_udp():
     path = dds.packaged_profile()
     assert path is not None and 'install' in path
     root = ET.parse(path).getroot()
-    segment = int(root.find('.//%ssegment_size' % NS).text)
-    assert segment >= 2 * 1920 * 1080 * 3, 'room for two 1080p bgr8 frames in flight'
-    assert segment <= 32 << 20, 'every node allocates it whole: boards have 1 GB of RAM'
     transports = [t.text for t in root.iter(NS + 'transport_id')]
     assert 'py_vision_shm' in transports and 'py_vision_udp' in transports
+    assert allowed_interfaces(path) == [], 'the packaged profile reaches other hosts'
 
 
 def test_used_by_default_and_capped_to_the_kernel_limits(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     env = {}
-    used = dds.use_packaged_profile(env)
+    used = dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher', env)
     assert env['FASTRTPS_DEFAULT_PROFILES_FILE'] == used
-    limits = {'sendBufferSize': '/proc/sys/net/core/wmem_max',
-              'receiveBufferSize': '/proc/sys/net/core/rmem_max'}
     for tag, size in buffer_sizes(used).items():
-        assert size <= int(Path(limits[tag]).read_text())
+        assert size <= int(Path(LIMITS[tag]).read_text())
 
 
-def test_buffers_above_the_limit_are_capped_in_a_copy(tmp_path):
+def test_buffers_above_the_limit_are_capped_in_a_copy():
     packaged = dds.packaged_profile()
-    fitted = dds.fit_to_kernel(packaged, {'sendBufferSize': 212992,
-                                          'receiveBufferSize': 212992})
+    small = {'sendBufferSize': 212992, 'receiveBufferSize': 212992}
+    fitted = dds.tailor(packaged, limits=small)
     assert fitted != packaged
-    assert buffer_sizes(fitted) == {'sendBufferSize': 212992, 'receiveBufferSize': 212992}
-    # Everything else is the packaged profile.
-    assert without_buffer_sizes(fitted) == without_buffer_sizes(packaged)
-    big = {'sendBufferSize': 1 << 30, 'receiveBufferSize': 1 << 30}
-    assert dds.fit_to_kernel(packaged, big) == packaged
+    assert buffer_sizes(fitted) == small
+    assert segment(fitted) == segment(packaged)
+    assert dds.tailor(packaged, limits={'sendBufferSize': 1 << 30,
+                                        'receiveBufferSize': 1 << 30}) == packaged
+
+
+def test_segment_holds_the_frames_a_node_publishes_and_no_more():
+    assert dds.segment_size(dds.NO_IMAGES) == dds.SMALL_SEGMENT
+    vga = dds.segment_size(dds.OWN_SIZE, [], 'usbcam_publisher')
+    assert 2 * VGA_BYTES <= vga <= 4 * VGA_BYTES
+    full_hd = dds.segment_size(dds.OWN_SIZE, [
+        'usbcam_publisher', '--ros-args', '-p', 'image_width:=1920',
+        '--param', 'image_height:=1080'], 'usbcam_publisher')
+    assert full_hd == vga * (1920 * 1080) // (640 * 480)
+    # What it publishes unknown: as large as 1920x1080.
+    assert dds.segment_size(None) == full_hd
+    # Told nothing, a node that republishes what it receives must assume large frames.
+    assert dds.segment_size(dds.INPUT_SIZE, [], 'cv_bridge_test') == full_hd
+    assert dds.segment_size(dds.INPUT_SIZE, [
+        '--ros-args', '-p', 'image_width:=640', '-p', 'image_height:=480'],
+        'cv_bridge_test') == vga
+    # Arguments after a closing -- are not ROS arguments.
+    assert dds.segment_size(dds.OWN_SIZE, [
+        '--ros-args', '--', '-p', 'image_width:=1920'], 'usbcam_publisher') == vga
+
+
+def test_frame_size_from_a_parameter_file(tmp_path):
+    params = tmp_path / 'params.yaml'
+    params.write_text('usbcam_publisher:\n  ros__parameters:\n    image_width: 1280\n'
+                      '    image_height: 720\n'
+                      '/**:\n  ros__parameters:\n    image_height: 960\n'
+                      'other_node:\n  ros__parameters:\n    image_width: 4000\n')
+    args = ['--ros-args', '--params-file', str(params)]
+    assert dds.requested_size(args, 'usbcam_publisher') == (1280, 720)
+    assert dds.requested_size(args, 'cv_bridge_test') == (640, 960)
+    # A node that republishes the camera's frames reads the camera's entry in a shared file,
+    # as pipeline.launch.py gives params.yaml to every node.
+    assert dds.segment_size(dds.INPUT_SIZE, args, 'cv_bridge_test') == \
+        dds.segment_size(dds.OWN_SIZE, args, 'usbcam_publisher')
+    # The command line wins over the file, as in rcl.
+    assert dds.requested_size(args + ['-p', 'image_width:=320'], 'usbcam_publisher') == (
+        320, 720)
+
+
+def test_unreadable_sizes_assume_large_frames(tmp_path):
+    broken = tmp_path / 'broken.yaml'
+    broken.write_text('usbcam_publisher: [unclosed\n')
+    for args in (['--ros-args', '--params-file', str(broken)],
+                 ['--ros-args', '--params-file', str(tmp_path / 'missing.yaml')],
+                 ['--ros-args', '-p', 'image_width:=wide'],
+                 ['--ros-args', '-p', 'image_width:=0']):
+        assert dds.requested_size(args, 'usbcam_publisher') == dds.SAFE_SIZE, args
+
+
+def test_localhost_settings_restrict_udp_to_loopback(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for env, local in (({}, False), ({'ROS_LOCALHOST_ONLY': '0'}, False),
+                       ({'ROS_AUTOMATIC_DISCOVERY_RANGE': 'SUBNET'}, False),
+                       ({'ROS_LOCALHOST_ONLY': '1'}, True),
+                       ({'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}, True),
+                       ({'ROS_AUTOMATIC_DISCOVERY_RANGE': 'OFF'}, True),
+                       # Jazzy: ROS_LOCALHOST_ONLY=1 overrides the range.
+                       ({'ROS_LOCALHOST_ONLY': '1',
+                         'ROS_AUTOMATIC_DISCOVERY_RANGE': 'SUBNET'}, True)):
+        path = dds.use_packaged_profile(dds.NO_IMAGES, [], 'usbcam_subscriber', dict(env))
+        assert allowed_interfaces(path) == (['127.0.0.1'] if local else []), env
+        assert segment(path) == dds.SMALL_SEGMENT
 
 
 def test_user_settings_and_other_rmws_are_left_alone(tmp_path, monkeypatch):
@@ -75,11 +142,12 @@ def test_user_settings_and_other_rmws_are_left_alone(tmp_path, monkeypatch):
                 {'FASTDDS_DEFAULT_PROFILES_FILE': '/etc/mine.xml'},
                 {'RMW_IMPLEMENTATION': 'rmw_cyclonedds_cpp'}):
         before = dict(env)
-        assert dds.use_packaged_profile(env) is None
+        assert dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher', env) is None
         assert env == before
     env = {'RMW_IMPLEMENTATION': 'rmw_fastrtps_cpp'}
-    assert dds.use_packaged_profile(env) is not None
+    assert dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher', env) is not None
     # Fast DDS reads DEFAULT_FASTRTPS_PROFILES.xml from the working directory by itself.
     (tmp_path / 'DEFAULT_FASTRTPS_PROFILES.xml').write_text('<profiles/>')
     env = {}
-    assert dds.use_packaged_profile(env) is None and env == {}
+    assert dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher', env) is None
+    assert env == {}
