@@ -26,7 +26,6 @@ import sys
 import cv2
 import numpy as np
 from py_vision.params import ConfigError
-from py_vision.web_viewer import WebViewer, WebViewerError
 
 DISPLAYS = ('auto', 'window', 'web', 'none')
 WEB_STATS_PERIOD_S = 1.0
@@ -86,6 +85,9 @@ class Display:
                 return
             mode = 'web'
         if mode == 'web':
+            # Imported only here: the HTTP server brings OpenSSL along (about 7 MB of memory
+            # per process, bench/bench_memory.py), which a node that shows nothing never needs.
+            from py_vision.web_viewer import WebViewer, WebViewerError
             viewer = WebViewer(web_host, web_port, title='py_vision: %s' % title, logger=logger)
             try:
                 viewer.start()
