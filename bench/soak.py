@@ -13,50 +13,66 @@
 # limitations under the License.
 
 """
-Soak test: run the installed publisher and subscriber for minutes and watch them grow.
+Soak test: run py_vision's publisher and subscriber for minutes and watch them grow.
 
   .venv/bin/python bench/soak.py [--minutes 10] [--fps 30] [--width 640 --height 480]
                                  [--sample-every 10]
 
-Starts ``usbcam_publisher`` (``video_device:=synthetic``) and ``usbcam_subscriber``
-(``display:=none``) as separate processes on a domain id of their own, with localhost discovery
-and the Fast DDS profile the nodes ship. Every few seconds it samples each process from /proc:
-resident memory, open file descriptors, threads and CPU. The subscriber's statistics lines give
-frames received, rate, latency and lost frames (by the synthetic frames' index). At the end both
-get SIGINT and must exit with status 0.
+Starts the installed ``usbcam_publisher`` (``video_device:=synthetic``) and
+``usbcam_subscriber`` (``display:=none``), each through bench/pyv_nodes.py (the nodes
+unchanged, plus one record per frame: the publisher's (time, frame index) of every captured
+frame, the subscriber's (arrival, frame index, latency) of every image), as separate processes
+on a domain id of their own, with localhost discovery and the Fast DDS profile the nodes ship.
+Every few seconds it samples each process from /proc: resident memory, open file descriptors,
+threads and CPU. At the end both get SIGINT and must exit with status 0; their records then
+give frames published, received and lost (by the synthetic frames' index) and latency.
 
-Verdict, after a warm-up that is left out (the first minute): resident memory grows less than a
-tolerance (a line fitted through the samples), file descriptors do not grow, no frame is lost,
-both by the subscriber's count and by comparing received frames with fps x duration.
-Writes bench/results/soak.json and soak.png (copied to docs/soak.png) and prints a table.
+Verdict, after a warm-up that is left out (the first minute): resident memory, less what the
+per-frame records themselves hold (their cost per record is measured in a child process of the
+same Python), grows less than a tolerance (a line fitted through the samples), file descriptors
+do not grow, no published frame is lost, and the frames received after the warm-up are fps x
+duration. Writes bench/results/soak.json and soak.png (copied to docs/soak.png) and prints a
+table.
 """
 
 import argparse
+from bisect import bisect_right
 import json
 import os
 from pathlib import Path
 import re
 import shutil
 import signal
+import subprocess
 import sys
 import tempfile
 import time
 
-from bench_pipeline import (CLK_TCK, cpu_ticks, DomainId, INSTALL, installed_env, Proc, REPO,
-                            RESULTS, wait_for)
+from bench_pipeline import (BENCH, CLK_TCK, cpu_ticks, DomainId, installed_env, percentile,
+                            Proc, REPO, RESULTS)
 
-EXECUTABLES = INSTALL / 'py_vision' / 'lib' / 'py_vision'
 LOG_FORMAT = '[{severity}] [{time}] [{name}]: {message}'
+ROLES = ('publisher', 'subscriber')
+# Only for the progress lines while it runs; the counts come from the records.
+RECEIVED_LINE = re.compile(r'\[usbcam_subscriber\]: received (\d+) frames')
 
-STATS_LINE = re.compile(
-    r'\[(?P<stamp>\d+\.\d+)\] \[usbcam_subscriber\]: received (?P<frames>\d+) frames '
-    r'\((?P<fps>[\d.]+) fps\), latency p50 (?P<p50>[\d.]+) ms p99 (?P<p99>[\d.]+) ms, '
-    r'lost (?P<lost>\d+), (?P<size>\d+x\d+) (?P<encoding>\S+) on (?P<topic>\S+?)'
-    r'(?:, gap of (?P<gap>[\d.]+) s)?$', re.MULTILINE)
-IDLE_LINE = re.compile(
-    r'\[(?P<stamp>\d+\.\d+)\] \[usbcam_subscriber\]: no frames on \S+ in the last \S+ s '
-    r'\((?P<frames>\d+) received in total\)', re.MULTILINE)
-PUBLISHED_LINE = re.compile(r'camera released after (\d+) frames')
+# What one record of pyv_nodes costs: the same tuples, appended to a list in a fresh process.
+RECORD_COST = """
+import sys, time
+def rss():
+    with open('/proc/self/status') as stream:
+        for line in stream:
+            if line.startswith('VmRSS:'):
+                return int(line.split()[1]) * 1024
+count, fields = int(sys.argv[1]), int(sys.argv[2])
+records = []
+before = rss()
+for index in range(1000, 1000 + count):
+    now = time.monotonic()
+    records.append((now, index) if fields == 2 else (now, index, now - 0.001))
+print((rss() - before) / count)
+"""
+RECORD_FIELDS = {'publisher': 2, 'subscriber': 3}
 
 
 # ----------------------------------------------------------------------------- /proc
@@ -117,20 +133,77 @@ def cpu_between(first, last, role):
 
 # ----------------------------------------------------------------------------- analysis
 
-def parse_stats(text):
-    """Return the subscriber's statistics lines, in order, as dicts (cumulative frames, lost)."""
-    lines = []
-    for match in STATS_LINE.finditer(text):
-        lines.append({'stamp': float(match['stamp']), 'frames': int(match['frames']),
-                      'fps': float(match['fps']), 'p50_ms': float(match['p50']),
-                      'p99_ms': float(match['p99']), 'lost': int(match['lost']),
-                      'size': match['size'], 'encoding': match['encoding'],
-                      'gap_s': float(match['gap']) if match['gap'] else None})
-    for match in IDLE_LINE.finditer(text):
-        lines.append({'stamp': float(match['stamp']), 'frames': int(match['frames']),
-                      'fps': 0.0, 'idle': True})
-    lines.sort(key=lambda line: line['stamp'])
-    return lines
+def record_cost(python, role, count=200000):
+    """Return the resident bytes one of pyv_nodes' per-frame records of a role holds."""
+    done = subprocess.run([python, '-c', RECORD_COST, str(count), str(RECORD_FIELDS[role])],
+                          capture_output=True, text=True, check=True, timeout=120)
+    return float(done.stdout)
+
+
+class Frames:
+    """The publisher's and the subscriber's per-frame records, indexed for counting."""
+
+    def __init__(self, published, received):
+        self.published = sorted(published)  # (monotonic time, frame index)
+        self.arrival, self.latency = {}, {}
+        self.records = len(received)
+        self.record_times = sorted(when for when, _, _ in received)
+        self.undecoded = 0
+        for when, index, latency in received:
+            if index is None:
+                self.undecoded += 1
+            elif index not in self.arrival:
+                self.arrival[index] = when
+                self.latency[index] = latency
+        self.duplicates = self.records - self.undecoded - len(self.arrival)
+        self.arrivals = sorted(self.arrival.values())
+        self.first_index = min(self.arrival) if self.arrival else None
+        # A published frame is lost if it never arrived, counting from the first one that did
+        # (frames before it went out before discovery had matched the subscriber).
+        self.lost_times = [t for t, index in self.published
+                           if self.first_index is not None and index >= self.first_index
+                           and index not in self.arrival]
+        self.published_times = [t for t, _ in self.published]
+
+    def published_by(self, now):
+        return bisect_right(self.published_times, now)
+
+    def records_by(self, now):
+        return bisect_right(self.record_times, now)
+
+    def received_by(self, now):
+        return bisect_right(self.arrivals, now)
+
+    def lost_by(self, now):
+        return bisect_right(self.lost_times, now)
+
+    def latencies_between(self, first, last):
+        """Return the sorted latencies (s) of the frames that arrived in (first, last]."""
+        return sorted(self.latency[i] for i, t in self.arrival.items() if first < t <= last)
+
+
+def add_frames(samples, started, frames, costs):
+    """Add to each sample the frames so far and its RSS less what the records hold by then."""
+    previous = None
+    for row in samples:
+        now = started + row['t']
+        for role, count in (('publisher', frames.published_by(now)),
+                            ('subscriber', frames.records_by(now))):
+            proc = row[role]
+            proc['records'] = count
+            proc['rss_net'] = (None if proc['rss'] is None
+                               else int(proc['rss'] - count * costs[role]))
+        received = frames.received_by(now)
+        lats = frames.latencies_between(started + previous['t'] if previous else 0.0, now)
+        span = row['t'] - previous['t'] if previous else None
+        row['frames'] = {
+            'published': frames.published_by(now), 'received': received,
+            'lost': frames.lost_by(now),
+            'fps': (round((received - previous['frames']['received']) / span, 2)
+                    if span else None),
+            'p50_ms': round(percentile(lats, 0.5) * 1e3, 2) if lats else None,
+            'p99_ms': round(percentile(lats, 0.99) * 1e3, 2) if lats else None}
+        previous = row
 
 
 def fit_line(points):
@@ -149,8 +222,8 @@ def fit_line(points):
 
 def growth(samples, role, key, warmup):
     """Return the growth of one quantity after the warm-up: first, last, fitted, per minute."""
-    points = [(row['t'], row[role][key]) for row in samples
-              if row['t'] >= warmup and row[role][key] is not None]
+    points = [(row['t'], row[role].get(key)) for row in samples
+              if row['t'] >= warmup and row[role].get(key) is not None]
     if not points:
         return None
     slope, _ = fit_line(points)
@@ -161,68 +234,79 @@ def growth(samples, role, key, warmup):
             'fitted_change': slope * span, 'per_min': slope * 60.0, 'span_s': span}
 
 
-def frame_counts(stats, samples, warmup, fps, published, stop_wall):
+def frame_counts(frames, started, warmup, stop, fps):
     """
-    Return the frames expected, received and lost after the warm-up and over the run.
+    Return the frames published, received and lost over the run and after the warm-up.
 
-    The window for fps x duration runs from the first statistics line after the warm-up to the
-    last one before the publisher was stopped.
+    The window after the warm-up ends when the publisher is stopped; a frame counts in it by
+    its capture time (lost) or its arrival (received, against fps x duration).
     """
-    started_wall = samples[0]['wall'] - samples[0]['t']
-    active = [s for s in stats if not s.get('idle')]
-    after = [s for s in active
-             if s['stamp'] - started_wall >= warmup and s['stamp'] < stop_wall]
-    out = {'published_total': published,
-           'received_total': stats[-1]['frames'] if stats else None,
-           'lost_by_subscriber': active[-1]['lost'] if active else None}
-    if published is not None and out['received_total'] is not None:
-        out['published_minus_received'] = published - out['received_total']
-        out['before_first_delivery'] = (out['published_minus_received']
-                                        - (out['lost_by_subscriber'] or 0))
-    if len(after) >= 2:
-        first, last = after[0], after[-1]
-        span = last['stamp'] - first['stamp']
-        expected = fps * span
-        received = last['frames'] - first['frames']
-        out.update(window_s=round(span, 3), expected_in_window=round(expected, 1),
-                   received_in_window=received,
-                   missing_in_window=round(expected - received, 1),
-                   lost_by_subscriber_in_window=last['lost'] - first['lost'],
-                   received_fps_in_window=round(received / span, 3) if span > 0 else None)
+    first, last = started + warmup, stop
+    span = last - first
+    window = [index for t, index in frames.published if first <= t <= last]
+    arrived = bisect_right(frames.arrivals, last) - bisect_right(frames.arrivals, first)
+    lats = frames.latencies_between(first, last)
+    out = {'published_total': len(frames.published), 'received_total': len(frames.arrival),
+           'records_total': frames.records, 'duplicates': frames.duplicates,
+           'undecoded': frames.undecoded, 'lost_total': len(frames.lost_times),
+           'before_first_delivery': sum(1 for _, index in frames.published
+                                        if frames.first_index is None
+                                        or index < frames.first_index),
+           'window_s': round(span, 3), 'expected_in_window': round(fps * span, 1),
+           'published_in_window': len(window),
+           'lost_in_window': sum(1 for index in window if index not in frames.arrival),
+           'received_in_window': arrived,
+           'missing_in_window': round(fps * span - arrived, 1),
+           'received_fps_in_window': round(arrived / span, 3) if span > 0 else None,
+           'p50_ms_in_window': round(percentile(lats, 0.5) * 1e3, 2) if lats else None,
+           'p99_ms_in_window': round(percentile(lats, 0.99) * 1e3, 2) if lats else None}
+    if window:
+        # The synthetic camera skips an index when it falls a whole frame behind its schedule.
+        out['source_skipped_in_window'] = max(window) - min(window) + 1 - len(window)
     return out
 
 
 def verdict(report, rss_tolerance_mb, frame_tolerance):
     """Return a list of (check, passed, detail) for the README's targets."""
     checks = []
-    for role in ('publisher', 'subscriber'):
+    for role in ROLES:
         rss = report['growth'][role]['rss']
+        net = report['growth'][role]['rss_net']
         fds = report['growth'][role]['fds']
         if rss is None or fds is None:
             checks.append(('%s sampled' % role, False, 'no samples after the warm-up'))
             continue
-        fitted = rss['fitted_change'] / 2 ** 20
         anon = report['growth'][role]['rss_anon']
-        checks.append(('%s RSS growth < %g MB' % (role, rss_tolerance_mb),
-                       fitted < rss_tolerance_mb,
-                       'fitted %+.2f MB (%+.3f MB/min); last - first %+.2f MB; '
-                       'anonymous memory fitted %+.2f MB' % (
-                           fitted, rss['per_min'] / 2 ** 20, rss['change'] / 2 ** 20,
-                           anon['fitted_change'] / 2 ** 20 if anon else float('nan'))))
+        if net is None:
+            checks.append(('%s RSS growth < %g MB' % (role, rss_tolerance_mb), False,
+                           'no per-frame records to account for; fitted %+.2f MB in all' % (
+                               rss['fitted_change'] / 2 ** 20)))
+        else:
+            fitted = net['fitted_change'] / 2 ** 20
+            checks.append((
+                '%s RSS growth < %g MB' % (role, rss_tolerance_mb), fitted < rss_tolerance_mb,
+                'fitted %+.2f MB (%+.3f MB/min) less the records; in all fitted %+.2f MB, '
+                'last - first %+.2f MB, anonymous memory fitted %+.2f MB' % (
+                    fitted, net['per_min'] / 2 ** 20, rss['fitted_change'] / 2 ** 20,
+                    rss['change'] / 2 ** 20,
+                    anon['fitted_change'] / 2 ** 20 if anon else float('nan'))))
         checks.append(('%s fd growth = 0' % role, fds['change'] <= 0,
                        '%d -> %d (range %d..%d)' % (fds['first'], fds['last'], fds['min'],
                                                     fds['max'])))
     frames = report['frames']
-    lost = frames.get('lost_by_subscriber')
-    checks.append(('no frame lost (subscriber count, whole run)', lost == 0,
-                   'lost %s, of which %s after the warm-up' % (
-                       lost, frames.get('lost_by_subscriber_in_window'))))
-    missing = frames.get('missing_in_window')
-    checks.append(('received = fps x duration (+-%g)' % frame_tolerance,
-                   missing is not None and abs(missing) <= frame_tolerance,
-                   'expected %s, received %s in %s s after the warm-up' % (
-                       frames.get('expected_in_window'), frames.get('received_in_window'),
-                       frames.get('window_s'))))
+    if 'error' in frames:
+        checks.append(('frames counted', False, frames['error']))
+    else:
+        checks.append(('no frame lost (by frame index, whole run)', frames['lost_total'] == 0,
+                       'lost %d of %d published after the first delivery, of which %d after '
+                       'the warm-up' % (frames['lost_total'], frames['published_total']
+                                        - frames['before_first_delivery'],
+                                        frames['lost_in_window'])))
+        checks.append(('received = fps x duration (+-%g)' % frame_tolerance,
+                       abs(frames['missing_in_window']) <= frame_tolerance,
+                       'expected %s, received %s in %s s after the warm-up' % (
+                           frames['expected_in_window'], frames['received_in_window'],
+                           frames['window_s'])))
     for role, status in report['exit_status'].items():
         checks.append(('%s exits with 0 on SIGINT' % role, status == 0, 'exit %s' % status))
     return checks
@@ -250,22 +334,30 @@ def minute_rows(samples):
     return rows
 
 
-def table(samples, stats):
+def table(samples, frames, started):
+    """Return a Markdown table of one sample a minute; fps and latency since the row before."""
     head = ('| time | pub RSS MB | pub fds | pub threads | pub CPU% | sub RSS MB | sub fds | '
             'sub threads | sub CPU% | received | fps | lost | p50 ms | p99 ms | load avg |')
     lines = [head, '|' + '---:|' * head.count(' | ') + '---:|']
     rows = minute_rows(samples)
     for previous, row in zip([None] + rows[:-1], rows):
-        seen = [s for s in stats if s['stamp'] <= row['wall'] and not s.get('idle')]
-        last = seen[-1] if seen else {}
         cells = ['%d:%02d' % divmod(int(round(row['t'])), 60)]
-        for role in ('publisher', 'subscriber'):
+        for role in ROLES:
             p = row[role]
             cells += [mb(p['rss']), opt(p['fds']), opt(p['threads']),
                       opt(cpu_between(previous, row, role))]
-        cells += [opt(last.get('frames')), opt(last.get('fps'), '%.1f'), opt(last.get('lost')),
-                  opt(last.get('p50_ms'), '%.1f'), opt(last.get('p99_ms'), '%.1f'),
-                  '%.2f' % row['loadavg'][0]]
+        received = fps = lost = p50 = p99 = None
+        if frames is not None:
+            now = started + row['t']
+            since = started + previous['t'] if previous else 0.0
+            received, lost = frames.received_by(now), frames.lost_by(now)
+            if previous is not None:
+                fps = (received - frames.received_by(since)) / (row['t'] - previous['t'])
+            lats = frames.latencies_between(since, now)
+            if lats:
+                p50, p99 = percentile(lats, 0.5) * 1e3, percentile(lats, 0.99) * 1e3
+        cells += [opt(received), opt(fps, '%.1f'), opt(lost), opt(p50, '%.1f'),
+                  opt(p99, '%.1f'), '%.2f' % row['loadavg'][0]]
         lines.append('| ' + ' | '.join(cells) + ' |')
     return '\n'.join(lines)
 
@@ -280,6 +372,10 @@ def plot(samples, warmup, path, title):
     for role, colour in (('publisher', '#4477aa'), ('subscriber', '#228833')):
         top.plot(minutes, [row[role]['rss'] / 2 ** 20 if row[role]['rss'] else None
                            for row in samples], color=colour, marker='.', label=role)
+        if any(row[role].get('rss_net') for row in samples):
+            top.plot(minutes, [row[role]['rss_net'] / 2 ** 20 if row[role].get('rss_net')
+                               else None for row in samples], color=colour, linestyle='--',
+                     label='%s less its per-frame records' % role)
         bottom.plot(minutes, [row[role]['fds'] for row in samples], color=colour,
                     marker='.', label=role)
     for axis in (top, bottom):
@@ -298,25 +394,37 @@ def plot(samples, warmup, path, title):
 # ----------------------------------------------------------------------------- main
 
 def start(args, env, workdir):
-    """Start the subscriber, then the publisher; return both Procs."""
-    sub = Proc('subscriber', [str(EXECUTABLES / 'usbcam_subscriber'), '--ros-args',
-                              '-p', 'display:=none',
-                              '-p', 'stats_period:=%r' % float(args.stats_period)],
+    """Start the subscriber, then the publisher, through pyv_nodes; return both Procs."""
+    nodes = [sys.executable, str(BENCH / 'pyv_nodes.py')]
+    sub = Proc('subscriber', nodes + ['subscriber', '{out}', '--ros-args',
+                                      '-p', 'display:=none',
+                                      '-p', 'stats_period:=%r' % float(args.stats_period)],
                env, workdir)
-    pub = Proc('publisher', [str(EXECUTABLES / 'usbcam_publisher'), '--ros-args',
-                             '-p', 'video_device:=synthetic',
-                             '-p', 'image_width:=%d' % args.width,
-                             '-p', 'image_height:=%d' % args.height,
-                             '-p', 'framerate:=%r' % float(args.fps)],
+    pub = Proc('publisher', nodes + ['publisher', '{out}', '--ros-args',
+                                     '-p', 'video_device:=synthetic',
+                                     '-p', 'image_width:=%d' % args.width,
+                                     '-p', 'image_height:=%d' % args.height,
+                                     '-p', 'framerate:=%r' % float(args.fps)],
                env, workdir)
     return {'publisher': pub, 'subscriber': sub}
 
 
+def received_so_far(log):
+    """Return the frame count of the subscriber's last statistics line, or '-'."""
+    counts = RECEIVED_LINE.findall(log)
+    return counts[-1] if counts else '-'
+
+
 def run(args, env, workdir, log=print):
-    """Run the soak; return samples, exit statuses, both logs, stop time and any error."""
+    """
+    Run the soak.
+
+    Return the samples, the start and stop (monotonic), exit statuses, both logs, both nodes'
+    per-frame records (None if a node wrote none) and any error.
+    """
     procs = start(args, env, workdir)
     started = time.monotonic()
-    samples, error, stop_wall = [], None, None
+    samples, error = [], None
     duration = args.minutes * 60.0
     try:
         step = 0
@@ -329,13 +437,12 @@ def run(args, env, workdir, log=print):
                     ' and '.join(gone), [procs[r].proc.returncode for r in gone])
                 break
             if step % max(1, int(round(60.0 / args.sample_every))) == 0:
-                stats = parse_stats(procs['subscriber'].output())
-                last = stats[-1] if stats else {}
-                log('[%5.0fs] pub %s MB %s fds | sub %s MB %s fds | received %s, lost %s | '
+                log('[%5.0fs] pub %s MB %s fds | sub %s MB %s fds | received %s | '
                     'load %.2f' % (row['t'], mb(row['publisher']['rss']),
                                    row['publisher']['fds'], mb(row['subscriber']['rss']),
-                                   row['subscriber']['fds'], last.get('frames', '-'),
-                                   last.get('lost', '-'), row['loadavg'][0]), flush=True)
+                                   row['subscriber']['fds'],
+                                   received_so_far(procs['subscriber'].output()),
+                                   row['loadavg'][0]), flush=True)
             step += 1
             due = step * args.sample_every
             if due > duration + 1e-6:
@@ -344,14 +451,15 @@ def run(args, env, workdir, log=print):
     except KeyboardInterrupt:
         error = 'interrupted'
     finally:
-        stop_wall = time.time()
+        stop = time.monotonic()
         status = {'publisher': procs['publisher'].stop()}
-        # One more statistics line after the publisher stopped gives the total received.
+        # Frames still in flight when the publisher stopped arrive within milliseconds.
+        time.sleep(0.5)
         sub = procs['subscriber']
-        wait_for(lambda: any(s['stamp'] > stop_wall for s in parse_stats(sub.output()))
-                 or sub.proc.poll() is not None, args.stats_period + 5.0, interval=0.2)
         status['subscriber'] = sub.stop()
-    return samples, status, procs['publisher'].output(), sub.output(), stop_wall, error
+    records = {role: procs[role].results() for role in ROLES}
+    logs = {role: procs[role].output() for role in ROLES}
+    return samples, started, stop, status, logs, records, error
 
 
 def main(argv=None):
@@ -369,25 +477,24 @@ def main(argv=None):
     parser.add_argument('--rss-tolerance-mb', type=float, default=1.0,
                         help='allowed fitted RSS growth after the warm-up, MB (1)')
     parser.add_argument('--frame-tolerance', type=float, default=2.0,
-                        help='allowed |expected - received| frames, for the boundaries of '
-                             'the statistics lines (2)')
+                        help='allowed |fps x duration - received| frames, for frames on the '
+                             'edges of the window (2)')
     parser.add_argument('--out', default=str(RESULTS), help='results directory')
     parser.add_argument('--docs', default=str(REPO / 'docs'),
                         help='where the plot is copied to ("" for nowhere)')
     args = parser.parse_args(argv)
     if args.sample_every <= 0 or args.stats_period <= 0:
         parser.error('--sample-every and --stats-period must be > 0')
-    if args.minutes * 60.0 < args.warmup + 2 * max(args.sample_every, args.stats_period):
+    if args.minutes * 60.0 < args.warmup + 2 * args.sample_every:
         parser.error('--minutes too short: the warm-up (%g s) leaves fewer than two samples'
                      % args.warmup)
-    for name in ('usbcam_publisher', 'usbcam_subscriber'):
-        if not (EXECUTABLES / name).is_file():
-            sys.exit('%s is missing: build first with scripts/setup.sh' % (EXECUTABLES / name))
 
     env = installed_env()
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     env['RCUTILS_CONSOLE_OUTPUT_FORMAT'] = LOG_FORMAT
     env['RCUTILS_COLORIZED_OUTPUT'] = '0'
+    env['PYTHONPATH'] = str(BENCH) + os.pathsep + env.get('PYTHONPATH', '')
+    costs = {role: record_cost(sys.executable, role) for role in ROLES}
     out_dir = Path(args.out)
     out_dir.mkdir(parents=True, exist_ok=True)
     workdir = Path(tempfile.mkdtemp(prefix='pyv_soak_'))
@@ -402,15 +509,20 @@ def main(argv=None):
         args.width, args.height, args.fps, args.minutes, domain.value, args.sample_every),
         flush=True)
     try:
-        samples, status, pub_log, sub_log, stop_wall, error = run(args, env, workdir)
+        samples, started, stop, status, logs, records, error = run(args, env, workdir)
     finally:
         domain.release()
     shutil.rmtree(workdir, ignore_errors=True)
 
-    roles = ('publisher', 'subscriber')
-    add_cpu_percent(samples, roles)
-    stats = parse_stats(sub_log)
-    published = PUBLISHED_LINE.search(pub_log)
+    add_cpu_percent(samples, ROLES)
+    frames = None
+    if records['publisher'] is None or records['subscriber'] is None:
+        missing = [role for role in ROLES if records[role] is None]
+        counts = {'error': 'no per-frame records from the %s' % ' and '.join(missing)}
+    else:
+        frames = Frames(records['publisher']['published'], records['subscriber']['received'])
+        add_frames(samples, started, frames, costs)
+        counts = frame_counts(frames, started, args.warmup, stop, args.fps)
     report = {
         'config': {'minutes': args.minutes, 'fps': args.fps, 'width': args.width,
                    'height': args.height, 'sample_every_s': args.sample_every,
@@ -418,33 +530,37 @@ def main(argv=None):
                    'rss_tolerance_mb': args.rss_tolerance_mb,
                    'frame_tolerance': args.frame_tolerance},
         'machine': {'cpus': os.cpu_count(), 'loadavg_end': os.getloadavg()},
+        'record_bytes': {role: round(cost, 1) for role, cost in costs.items()},
         'error': error, 'exit_status': status,
         'growth': {role: {key: growth(samples, role, key, args.warmup)
-                          for key in ('rss', 'rss_anon', 'rss_file', 'rss_shmem', 'fds',
-                                      'threads')} for role in roles},
-        'frames': frame_counts(stats, samples, args.warmup, args.fps,
-                               int(published.group(1)) if published else None, stop_wall),
-        'samples': samples, 'stats': stats,
+                          for key in ('rss', 'rss_net', 'rss_anon', 'rss_file', 'rss_shmem',
+                                      'fds', 'threads')} for role in ROLES},
+        'frames': counts, 'samples': samples,
     }
     checks = verdict(report, args.rss_tolerance_mb, args.frame_tolerance)
     report['verdict'] = [{'check': c, 'passed': ok, 'detail': d} for c, ok, d in checks]
     report['passed'] = error is None and all(ok for _, ok, _ in checks)
     if error is not None or not report['passed']:
-        report['log_publisher_tail'] = pub_log[-3000:]
-        report['log_subscriber_tail'] = sub_log[-3000:]
+        for role in ROLES:
+            report['log_%s_tail' % role] = logs[role][-3000:]
     with open(out_dir / 'soak.json', 'w') as stream:
         json.dump(report, stream, indent=1)
 
     print()
-    print(table(samples, stats))
-    frames = report['frames']
+    print(table(samples, frames, started))
     print()
-    print('frames: published %s, received %s (%s before the first delivery: discovery), '
-          'lost %s; after the warm-up expected %s (%g fps x %s s), received %s' % (
-              frames.get('published_total'), frames.get('received_total'),
-              frames.get('before_first_delivery'), frames.get('lost_by_subscriber'),
-              frames.get('expected_in_window'), args.fps, frames.get('window_s'),
-              frames.get('received_in_window')))
+    if frames is None:
+        print('frames: %s' % counts['error'])
+    else:
+        print('frames: published %d, received %d (%d published before the first delivery: '
+              'discovery), lost %d; after the warm-up expected %s (%g fps x %s s), received '
+              '%d, p50 %s ms, p99 %s ms; per-frame records hold %.0f (publisher) and %.0f '
+              '(subscriber) bytes each' % (
+                  counts['published_total'], counts['received_total'],
+                  counts['before_first_delivery'], counts['lost_total'],
+                  counts['expected_in_window'], args.fps, counts['window_s'],
+                  counts['received_in_window'], counts['p50_ms_in_window'],
+                  counts['p99_ms_in_window'], costs['publisher'], costs['subscriber']))
     print()
     for check, ok, detail in checks:
         print('- %s %s: %s' % ('PASS' if ok else 'FAIL', check, detail))
