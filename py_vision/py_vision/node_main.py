@@ -123,6 +123,11 @@ def run(node_class, args=None):
                                    node_class.SUMMARY))
         return 0
     install_quiet_signals()
+    # Ctrl-C and SIGTERM wait while rclpy starts and the node is built: rclpy shutting its
+    # context down while another thread creates a service or a timer can deadlock. Blocked
+    # here, in the main thread, before any other thread exists, the signals stay pending in
+    # every thread (DDS's and the node's inherit the mask) until the node spins.
+    _hold_signals(True)
     # The shared-memory segment is sized to what the node publishes, before parameters exist.
     dds.use_packaged_profile(node_class.PUBLISHES, argv, node_class.NODE_NAME)
     error = _init_rclpy(argv)
@@ -147,6 +152,7 @@ def run(node_class, args=None):
         node.__init__()
         built = True
         executor.add_node(node)
+        _hold_signals(False)  # a signal that came meanwhile is handled now
         executor.spin()
     except ConfigError as error:
         logger = node.get_logger() if _has_logger(node) else get_logger(node_class.NODE_NAME)
@@ -162,6 +168,7 @@ def run(node_class, args=None):
         _Stopping.cleaning = True
         _Stopping.rclpy_up = False
         _ignore_signals()
+        _hold_signals(False)  # pending ones are ignored now
         if node is not None:
             node.close()
             if built:
@@ -174,6 +181,12 @@ def run(node_class, args=None):
     if getattr(node, 'failed', False):
         status = 1
     return status
+
+
+def _hold_signals(hold):
+    """Block (hold pending) or unblock SIGINT and SIGTERM in the calling thread."""
+    how = signal.SIG_BLOCK if hold else signal.SIG_UNBLOCK
+    signal.pthread_sigmask(how, {signal.SIGINT, signal.SIGTERM})
 
 
 def _ignore_signals():
