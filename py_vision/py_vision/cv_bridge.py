@@ -423,9 +423,9 @@ def _copy_header(header):
     return copy
 
 
-def _fill_data(msg, cvim):
+def fill_message_data(msg, cvim):
     """
-    Copy the pixels of cvim, row after row, into msg.data with one copy.
+    Copy the bytes of array cvim, row after row, into msg.data (Image, CompressedImage) once.
 
     The message's own (empty) array.array is filled in place: rclpy's data setter copies its
     argument again unless ROS_PYTHON_CHECK_FIELDS=1, which doubles the cost of a frame.
@@ -574,7 +574,7 @@ class CvBridge:
         img_msg.is_bigendian = cvim.dtype.itemsize > 1 and (
             byteorder == '>' or (byteorder == '=' and _NATIVE_BIG))
         img_msg.step = img_msg.width * array_enc.pixel_bytes
-        _fill_data(img_msg, cvim)
+        fill_message_data(img_msg, cvim)
         return img_msg
 
     def compressed_imgmsg_to_cv2(self, cmprs_img_msg, desired_encoding='passthrough'):
@@ -605,7 +605,7 @@ class CvBridge:
         if header is not None:
             msg.header = _copy_header(header)
         msg.format = fmt
-        _fill_data(msg, buf)
+        fill_message_data(msg, buf)
         return msg
 
 

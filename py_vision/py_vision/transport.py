@@ -23,11 +23,11 @@ subscribers, and publishes a camera's own JPEG untouched. `subscribe()` is what 
 image_transport subscriber's ``image_transport`` parameter (``raw`` or ``compressed``) chooses.
 """
 
-import array
 from typing import Callable, Optional, Tuple
 
 import cv2
 import numpy as np
+from py_vision.cv_bridge import fill_message_data
 from py_vision.qos import ImageSubscription
 from sensor_msgs.msg import CompressedImage, Image
 
@@ -64,15 +64,6 @@ def jpeg_size(data) -> Optional[Tuple[int, int]]:
             return (view[i + 7] << 8) | view[i + 8], (view[i + 5] << 8) | view[i + 6]
         i += 2 + ((view[i + 2] << 8) | view[i + 3])
     return None
-
-
-def _fill(msg, data):
-    """Put bytes into msg.data with one copy (rclpy's data setter would copy twice)."""
-    target = msg.data
-    if not isinstance(target, array.array) or target.typecode != 'B' or len(target):
-        msg.data = array.array('B')
-        target = msg.data
-    target.frombytes(np.ascontiguousarray(data).reshape(-1).view(np.uint8))
 
 
 class ImagePublisher:
@@ -126,7 +117,7 @@ class ImagePublisher:
                     self.encoded += 1
             if jpeg is not None:
                 msg = CompressedImage(header=header, format=JPEG_FORMAT)
-                _fill(msg, jpeg)
+                fill_message_data(msg, jpeg)
                 self.compressed.publish(msg)
                 compressed_done = True
         return raw_done, compressed_done

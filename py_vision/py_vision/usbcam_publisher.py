@@ -144,8 +144,6 @@ class USBImagePublisher(Node):
             self.camera = self._open()
         except SourceError as error:
             raise ConfigError(str(error))
-        if not self.context.ok():
-            return  # Ctrl-C while the camera opened: close() releases it
         self.calibration = CameraInfoManager(
             values['camera_name'], values['camera_info_url'], self.get_logger())
         self.calibration.load()

@@ -141,6 +141,17 @@ def ros_args(params=None, remaps=None):
     return args
 
 
+def end_process_group(proc, timeout=5.0):
+    """End a process started with start_new_session: Ctrl-C to its group, SIGKILL if need be."""
+    if proc.poll() is None:
+        os.killpg(proc.pid, signal.SIGINT)
+        try:
+            proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+
+
 class NodeProcess:
     """
     One installed executable running in its own process, output captured to a file.

@@ -322,12 +322,6 @@ def test_two_hosts_over_a_veth_pair(ros_env, domain_id, tmp_path):
         assert result['indexes'] == sorted(result['indexes'])
     finally:
         for proc in procs:
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGINT)
-                try:
-                    proc.wait(5)
-                except subprocess.TimeoutExpired:
-                    os.killpg(proc.pid, signal.SIGKILL)
-                    proc.wait()
+            ros_harness.end_process_group(proc)
         for ns in hosts:
             subprocess.run(['ip', 'netns', 'del', ns], capture_output=True)

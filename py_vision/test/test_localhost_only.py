@@ -26,7 +26,6 @@ import json
 import os
 from pathlib import Path
 import shutil
-import signal
 import subprocess
 import sys
 
@@ -99,13 +98,7 @@ class TwoHosts:
 
     def close(self):
         for proc in self.procs:
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGINT)
-                try:
-                    proc.wait(5)
-                except subprocess.TimeoutExpired:
-                    os.killpg(proc.pid, signal.SIGKILL)
-                    proc.wait()
+            ros_harness.end_process_group(proc)
             proc.log.close()
         for ns in self.ns.values():
             subprocess.run(['ip', 'netns', 'del', ns], capture_output=True)
