@@ -42,7 +42,10 @@ from ament_index_python.packages import get_package_share_directory, PackageNotF
 
 PROFILE_NAME = 'fastdds_image_profile.xml'
 NS = 'http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles'
-_USER_SETTINGS = ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE')
+# The variable Fast DDS 2.x (2.6 on Humble, 2.14 on Jazzy) reads. FASTDDS_DEFAULT_PROFILES_FILE
+# is Fast DDS 3's (Kilted on): set alone, 2.x ignores it, and stepping aside for it would
+# leave the nodes on the 0.5 MB shared-memory default; 3.x in turn ignores our variable.
+USER_SETTING = 'FASTRTPS_DEFAULT_PROFILES_FILE'
 _FAST_DDS_RMWS = ('', 'rmw_fastrtps_cpp', 'rmw_fastrtps_dynamic_cpp')
 _KERNEL_LIMITS = {
     'sendBufferSize': '/proc/sys/net/core/wmem_max',
@@ -257,7 +260,7 @@ def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.env
     """
     if environ.get('RMW_IMPLEMENTATION', '') not in _FAST_DDS_RMWS:
         return None
-    if any(environ.get(name) for name in _USER_SETTINGS):
+    if environ.get(USER_SETTING):
         return None
     if os.path.exists('DEFAULT_FASTRTPS_PROFILES.xml'):
         return None
@@ -265,5 +268,5 @@ def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.env
     if path is not None:
         segment = segment_size(publishes, sys.argv if args is None else args, node_name)
         path = tailor(path, segment, localhost_only(environ))
-        environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = path
+        environ[USER_SETTING] = path
     return path

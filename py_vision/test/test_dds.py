@@ -139,7 +139,6 @@ def test_localhost_settings_restrict_udp_to_loopback(tmp_path, monkeypatch):
 def test_user_settings_and_other_rmws_are_left_alone(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     for env in ({'FASTRTPS_DEFAULT_PROFILES_FILE': '/etc/mine.xml'},
-                {'FASTDDS_DEFAULT_PROFILES_FILE': '/etc/mine.xml'},
                 {'RMW_IMPLEMENTATION': 'rmw_cyclonedds_cpp'}):
         before = dict(env)
         assert dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher', env) is None
@@ -151,3 +150,15 @@ def test_user_settings_and_other_rmws_are_left_alone(tmp_path, monkeypatch):
     env = {}
     assert dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher', env) is None
     assert env == {}
+
+
+def test_fast_dds_3s_variable_alone_does_not_leave_the_nodes_on_the_small_default(tmp_path,
+                                                                                monkeypatch):
+    # Fast DDS 2.6 (Humble, the boards) and 2.14 (Jazzy) read FASTRTPS_DEFAULT_PROFILES_FILE
+    # only: a FASTDDS_DEFAULT_PROFILES_FILE alone configures nothing there.
+    monkeypatch.chdir(tmp_path)
+    env = {'FASTDDS_DEFAULT_PROFILES_FILE': '/etc/mine.xml'}
+    path = dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher', env)
+    assert path is not None and env['FASTRTPS_DEFAULT_PROFILES_FILE'] == path
+    assert segment(path) > dds.SMALL_SEGMENT
+    assert env['FASTDDS_DEFAULT_PROFILES_FILE'] == '/etc/mine.xml'
