@@ -30,6 +30,7 @@ ignores one signal in three with a probability of 1 - (2/3)**ROUNDS per executab
 import os
 import random
 import signal
+import subprocess
 import threading
 import time
 
@@ -83,10 +84,13 @@ def one_round(executable, number, rng, env, peer):
         node.proc.send_signal(sig)
         try:
             status = node.proc.wait(STOP_BOUND_S)
-        except Exception:
-            node.kill()  # SIGINT again, then SIGKILL
-            return '%s: still running %.0f s after the signal (ignored it)\n%s' % (
-                what, STOP_BOUND_S, node.tail())
+        except subprocess.TimeoutExpired:
+            log = node.tail()
+            # Not a second signal: with rclpy's own handler that one would wake it.
+            os.killpg(node.proc.pid, signal.SIGKILL)
+            node.proc.wait()
+            return '%s: still running %.0f s after the signal (ignored it; killed)\n%s' % (
+                what, STOP_BOUND_S, log)
         lines = node.output().splitlines()
         stopped = 'stopped by %s' % signal.Signals(sig).name
         if status != 0 or not lines or stopped not in lines[-1]:
