@@ -83,8 +83,12 @@ def test_segment_holds_the_frames_a_node_publishes_and_no_more():
     assert full_hd == vga * (1920 * 1080) // (640 * 480)
     # What it publishes unknown: as large as 1920x1080.
     assert dds.segment_size(None) == full_hd
-    # Told nothing, a node that republishes what it receives must assume large frames.
-    assert dds.segment_size(dds.INPUT_SIZE, [], 'cv_bridge_test') == full_hd
+    # Told nothing, a node that republishes what it receives assumes the camera's default
+    # size, as the camera does (a plain `ros2 run` does not pay 15 MiB for 1080p room) ...
+    assert dds.segment_size(dds.INPUT_SIZE, [], 'cv_bridge_test') == vga
+    # ... and can tell when the frames it gets are larger than that.
+    assert dds.frame_fits(VGA_BYTES, vga) and not dds.frame_fits(4 * VGA_BYTES, vga)
+    assert dds.frame_fits(4 * VGA_BYTES, full_hd)
     assert dds.segment_size(dds.INPUT_SIZE, [
         '--ros-args', '-p', 'image_width:=640', '-p', 'image_height:=480'],
         'cv_bridge_test') == vga
