@@ -189,9 +189,9 @@ class CvBridgeTest(Node):
             self._too_large_said = True
             self.get_logger().warning(
                 '%dx%d frames do not fit the shared memory this node sized at start-up for '
-                'the camera\'s default size: same-host subscribers get them late or not at '
-                'all; start it with -p image_width:=%d -p image_height:=%d (or the camera\'s '
-                'parameter file)' % (cols, rows, cols, rows))
+                "the camera's default size: same-host subscribers get them late or not at "
+                'all; start it with -p image_width:=%d -p image_height:=%d (or the '
+                "camera's parameter file)" % (cols, rows, cols, rows))
         if self.display.active:
             with self._shown_lock:
                 self._to_show = image

@@ -156,8 +156,8 @@ def test_user_settings_and_other_rmws_are_left_alone(tmp_path, monkeypatch):
     assert env == {}
 
 
-def test_fast_dds_3s_variable_alone_does_not_leave_the_nodes_on_the_small_default(tmp_path,
-                                                                                monkeypatch):
+def test_fast_dds_3s_variable_alone_does_not_leave_nodes_on_the_small_default(
+        tmp_path, monkeypatch):
     # Fast DDS 2.6 (Humble, the boards) and 2.14 (Jazzy) read FASTRTPS_DEFAULT_PROFILES_FILE
     # only: a FASTDDS_DEFAULT_PROFILES_FILE alone configures nothing there.
     monkeypatch.chdir(tmp_path)

@@ -97,14 +97,14 @@ def test_a_file_opencv_cannot_read(tmp_path):
     assert error.endswith(frame_source.video_file_support(cv2.getBuildInformation()))
 
 
-BUILD = '''
+BUILD = """
   Video I/O:
     DC1394:                      NO
     FFMPEG:                      %s
       avcodec:                   YES (58.134.100)
     GStreamer:                   %s
     v4l/v4l2:                    YES (linux/videodev2.h)
-'''
+"""
 
 
 def test_an_opencv_without_ffmpeg_names_what_video_files_depend_on():
