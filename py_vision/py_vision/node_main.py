@@ -197,8 +197,8 @@ def run(node_class, args=None):
     watch = None
     status = 0
     try:
-        # The object exists before its __init__ (which opens devices and ports) so that an
-        # interrupted start-up can still be cleaned up.
+        # The object exists before its __init__ (which opens devices and ports) so that a
+        # start-up that fails half-way (ConfigError) can still be cleaned up.
         if _Stopping.signum is None:  # else: stopped before there was anything to build
             node = node_class.__new__(node_class)
             node.__init__()
