@@ -129,7 +129,10 @@ def test_every_node_stops_on_every_signal_after_parameter_calls(ros_env, domain_
             for number in range(ROUNDS):
                 failure = one_round(lane, number, rng, ros_env, peer)
                 if failure:
-                    failures.append(failure)
+                    # The lane ends here: a killed node's DDS participant outlives it until
+                    # its lease expires, and would answer for the next round's discovery.
+                    failures.append("%s (the lane's other rounds were not run)" % failure)
+                    return
         except Exception as error:  # the test's own peer failed: say so, do not hang
             failures.append('%s: %s: %s' % (node_name, type(error).__name__, error))
         finally:
@@ -140,5 +143,5 @@ def test_every_node_stops_on_every_signal_after_parameter_calls(ros_env, domain_
         thread.start()
     for thread in threads:
         thread.join()
-    assert not failures, '%d of %d rounds failed (seed %d):\n\n%s' % (
-        len(failures), ROUNDS * len(LANES), seed, '\n\n'.join(failures))
+    assert not failures, '%d of %d lanes failed (seed %d, %d rounds a lane):\n\n%s' % (
+        len(failures), len(LANES), seed, ROUNDS, '\n\n'.join(failures))
