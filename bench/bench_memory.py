@@ -45,6 +45,7 @@ from bench_pipeline import DomainId, INSTALL, installed_env, Proc, wait_for
 BENCH = Path(__file__).resolve().parent
 EXECUTABLES = INSTALL / 'py_vision' / 'lib' / 'py_vision'
 SIZES = ((640, 480), (1920, 1080))
+CAMERA_DEFAULT_SIZE = (640, 480)  # usbcam_publisher's image_width, image_height
 ROLES = ('publisher', 'processor', 'subscriber')
 STATUS_FIELDS = ('VmRSS', 'RssAnon', 'RssFile', 'RssShmem')
 PYV_RECEIVED = re.compile(r'received (\d+) frames')
@@ -65,9 +66,11 @@ def commands(kind, width, height, fps):
         ('publisher', [str(EXECUTABLES / 'usbcam_publisher'), '--ros-args',
                        '-p', 'video_device:=synthetic', '-p', 'image_width:=%d' % width,
                        '-p', 'image_height:=%d' % height, '-p', 'framerate:=%r' % fps]),
-        # Told the camera's size, as pipeline.launch.py and params.yaml's /** entry tell it.
-        ('processor', [str(EXECUTABLES / 'cv_bridge_test'), '--ros-args',
-                       '-p', 'image_width:=%d' % width, '-p', 'image_height:=%d' % height]),
+        # As `ros2 run py_vision cv_bridge_test` starts it: told the camera's size only where
+        # it is not the camera's default (as pipeline.launch.py tells it, through params.yaml).
+        ('processor', [str(EXECUTABLES / 'cv_bridge_test'), '--ros-args'] + (
+            [] if (width, height) == CAMERA_DEFAULT_SIZE else
+            ['-p', 'image_width:=%d' % width, '-p', 'image_height:=%d' % height])),
         ('subscriber', [str(EXECUTABLES / 'usbcam_subscriber'), '--ros-args',
                         '-p', 'display:=none', '-p', 'stats_period:=1.0',
                         '-r', 'usb_camera/image:=cv_bridge_image']),

@@ -32,7 +32,8 @@ def _exit_quietly(signum, frame):
 # Importing rclpy, numpy and OpenCV takes a second or more on a board. When this package is
 # imported by one of its own executables, Ctrl-C or SIGTERM during that time ends the process
 # quietly instead of printing a KeyboardInterrupt traceback; node_main.run() then installs its
-# own handler, which lets rclpy stop the node. Library users keep their own signal handling.
+# own handler, which makes a signal a request to stop the node. Library users keep their own
+# signal handling.
 if (os.path.basename(sys.argv[0] if sys.argv else '') in EXECUTABLES
         and threading.current_thread() is threading.main_thread()):
     for _signal in (signal.SIGINT, signal.SIGTERM):

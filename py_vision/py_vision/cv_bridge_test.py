@@ -111,6 +111,7 @@ class CvBridgeTest(Node):
     )
 
     worker = display = None  # what close() finds when start-up was interrupted
+    _too_large_said = False  # the warning about frames larger than the segment
 
     def __init__(self):
         super().__init__(self.NODE_NAME)
@@ -184,6 +185,13 @@ class CvBridgeTest(Node):
         if self.stats.add_output(age, cols, rows) == 1:
             self.get_logger().info('first image: %dx%d %s' % (
                 cols, rows, 'jpeg' if isinstance(msg, CompressedImage) else msg.encoding))
+        if not self._too_large_said and not dds.frame_fits(image.nbytes):
+            self._too_large_said = True
+            self.get_logger().warning(
+                '%dx%d frames do not fit the shared memory this node sized at start-up for '
+                "the camera's default size: same-host subscribers get them late or not at "
+                'all; start it with -p image_width:=%d -p image_height:=%d (or the '
+                "camera's parameter file)" % (cols, rows, cols, rows))
         if self.display.active:
             with self._shown_lock:
                 self._to_show = image

@@ -42,7 +42,10 @@ from ament_index_python.packages import get_package_share_directory, PackageNotF
 
 PROFILE_NAME = 'fastdds_image_profile.xml'
 NS = 'http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles'
-_USER_SETTINGS = ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE')
+# The variable Fast DDS 2.x (2.6 on Humble, 2.14 on Jazzy) reads. FASTDDS_DEFAULT_PROFILES_FILE
+# is Fast DDS 3's (Kilted on): set alone, 2.x ignores it, and stepping aside for it would
+# leave the nodes on the 0.5 MB shared-memory default; 3.x in turn ignores our variable.
+USER_SETTING = 'FASTRTPS_DEFAULT_PROFILES_FILE'
 _FAST_DDS_RMWS = ('', 'rmw_fastrtps_cpp', 'rmw_fastrtps_dynamic_cpp')
 _KERNEL_LIMITS = {
     'sendBufferSize': '/proc/sys/net/core/wmem_max',
@@ -166,8 +169,11 @@ def segment_size(publishes, args=(), node_name=''):
         width, height = requested_size(args, node_name)
     elif publishes == INPUT_SIZE:
         # It cannot know what it will receive unless told: by its own image_width and
-        # image_height, or by the camera node's entry in the parameter file they share.
-        width, height = requested_size(args, node_name, SAFE_SIZE, (CAMERA_NODE,))
+        # image_height, or by the camera node's entry in the parameter file they share. Told
+        # nothing, it assumes the camera node's default size, as the camera node itself does:
+        # room for 1920x1080 would cost every plain `ros2 run` 15 MiB of RAM. A node that then
+        # receives larger frames says so (frame_fits).
+        width, height = requested_size(args, node_name, DEFAULT_SIZE, (CAMERA_NODE,))
     else:
         width, height = SAFE_SIZE
     return max(SMALL_SEGMENT, SEGMENT_FRAMES * width * height * BYTES_PER_PIXEL)
@@ -257,7 +263,7 @@ def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.env
     """
     if environ.get('RMW_IMPLEMENTATION', '') not in _FAST_DDS_RMWS:
         return None
-    if any(environ.get(name) for name in _USER_SETTINGS):
+    if environ.get(USER_SETTING):
         return None
     if os.path.exists('DEFAULT_FASTRTPS_PROFILES.xml'):
         return None
@@ -265,5 +271,21 @@ def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.env
     if path is not None:
         segment = segment_size(publishes, sys.argv if args is None else args, node_name)
         path = tailor(path, segment, localhost_only(environ))
-        environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = path
+        environ[USER_SETTING] = path
+        _chosen['segment'] = segment
     return path
+
+
+_chosen = {'segment': None}  # what use_packaged_profile() gave this process
+
+
+def frame_fits(frame_bytes, segment=None):
+    """
+    Return True if frames of frame_bytes fit the shared-memory segment this process was given.
+
+    segment: in bytes (default: the one use_packaged_profile() chose; None when the node runs
+    on another profile, which is then the user's to size). A segment holds SEGMENT_FRAMES
+    frames; larger frames reach same-host subscribers late or not at all.
+    """
+    segment = _chosen['segment'] if segment is None else segment
+    return segment is None or frame_bytes * SEGMENT_FRAMES <= segment

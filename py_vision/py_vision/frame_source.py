@@ -27,6 +27,7 @@ reads the driver's buffer timestamps and asks the device itself for its controls
 import contextlib
 import fcntl
 import os
+import re
 import stat
 import struct
 import sys
@@ -200,6 +201,26 @@ def _device_problem(path):
     return None
 
 
+def video_file_support(build_information):
+    """
+    Return '' or why this OpenCV reads few video files, from cv2.getBuildInformation().
+
+    OpenCV reads video files through FFmpeg, else through GStreamer (whose plugins decide
+    which formats open), else only MJPEG .avi files with its own reader. The boards' OpenCV
+    has no FFmpeg.
+    """
+    def built_with(backend):
+        found = re.search(r'^\s*%s:\s*(\S+)' % backend, build_information, re.MULTILINE)
+        return bool(found) and found.group(1).upper() != 'NO'
+    if built_with('FFMPEG'):
+        return ''
+    if built_with('GStreamer'):
+        return (' (this OpenCV has no FFmpeg: it reads files through GStreamer, which could not '
+                'open this one; install the GStreamer plugins for its format, e.g. '
+                'gstreamer1.0-plugins-good, -bad or -libav)')
+    return ' (this OpenCV has neither FFmpeg nor GStreamer: it reads only MJPEG .avi files)'
+
+
 def open_capture(video_device, width, height, fps):
     """
     Open what `video_device` names and return a VideoCapture-like object.
@@ -251,8 +272,8 @@ def open_capture(video_device, width, height, fps):
             raise SourceError('cannot open video_device "%s": permission denied' % device)
         source = VideoFileSource(device, fps)
         if not source.isOpened():
-            raise SourceError('cannot open video_device "%s": not a video file OpenCV can read'
-                              % device)
+            raise SourceError('cannot open video_device "%s": not a video file OpenCV can read%s'
+                              % (device, video_file_support(cv2.getBuildInformation())))
         return source
     if stat.S_ISDIR(mode):
         raise SourceError('cannot open video_device "%s": is a directory' % device)

@@ -18,9 +18,17 @@ The `main()` every py_vision executable shares: start-up, spin and a quiet, clea
 - ``--help`` / ``-h`` prints the node's parameters and exits 0 without starting anything.
 - Malformed ``--ros-args`` are one error line and exit status 2.
 - Bad configuration (ConfigError) is one error line and exit status 1.
-- Ctrl-C (SIGINT) and SIGTERM end the node with status 0 and no traceback, at any moment of
-  start-up or shutdown. The first signal stops the node; further ones (`ros2 launch` sends its
-  own SIGINT after the terminal's) are ignored, so the clean-up always runs to its end.
+- Ctrl-C (SIGINT) and SIGTERM end the node with status 0, no traceback and, once it was built,
+  a last line `stopped by SIGINT` after its clean-up, whatever it was doing when the signal came.
+  The first signal stops the node; further ones (`ros2 launch` sends its own SIGINT after the
+  terminal's) are ignored, so the clean-up always runs to its end.
+
+How a signal reaches the executor (docs/internals.md says why it is done this way): rclpy's own
+handler is not installed. Python's C-level handler, in whichever thread the kernel picks,
+writes the signal's number to a pipe (signal.set_wakeup_fd); a thread reading that pipe
+triggers a guard condition of the node, which wakes the executor; the main thread, between two
+callbacks, sees the request and stops spinning, then closes the node and shuts rclpy down
+itself. Nothing shuts rclpy down behind the main thread's back.
 """
 
 import os
@@ -34,34 +42,79 @@ from py_vision.params import ConfigError, help_text
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.logging import get_logger
+from rclpy.signals import SignalHandlerOptions
 
 __all__ = ['ConfigError', 'main_for', 'run']
 
 
 class _Stopping:
-    """What the process-level signal handler knows: whether rclpy took over, and stop requests."""
+    """What the signal handling knows: the first signal received, and whom to wake for it."""
 
-    rclpy_up = False
-    requested = False
-    cleaning = False
+    signum = None
+    wake = None  # triggers the running node's stop guard condition
 
 
 def _on_signal(signum, frame):
-    _Stopping.requested = True
-    if not _Stopping.rclpy_up:
-        # Still starting (or already shut down): nothing of ours to clean up yet, or the
-        # clean-up is running in `finally` below and must not be cut short.
-        if not _Stopping.cleaning:
-            raise SystemExit(0)
-    # Otherwise rclpy's own handler, which runs first, has shut the context down: spin()
-    # returns and the node closes; raising here would cut that clean-up short.
+    # Runs in the main thread between two bytecodes, maybe inside rclpy's own Python code:
+    # it only records the request (and wakes the executor, which is thread-safe), it never
+    # raises. The main thread stops at its next check, after the code it was running.
+    _request_stop(signum)
+
+
+def _request_stop(signum):
+    if _Stopping.signum is None:
+        _Stopping.signum = signum
+    wake = _Stopping.wake
+    if wake is not None:
+        wake()
 
 
 def install_quiet_signals():
-    """Make SIGINT and SIGTERM end this process quietly (called while the package imports)."""
+    """Make SIGINT and SIGTERM requests to stop, which run() carries out (main thread only)."""
     if threading.current_thread() is threading.main_thread():
         for sig in (signal.SIGINT, signal.SIGTERM):
             signal.signal(sig, _on_signal)
+
+
+class SignalWatch:
+    """
+    Wake an executor for SIGINT and SIGTERM, whichever thread the kernel delivers them to.
+
+    Python runs a signal's handler in the main thread only, and only between two bytecodes:
+    never while that thread sleeps in rcl_wait. Its C-level handler, which runs at once in
+    whatever thread took the signal, writes the signal's number to the wakeup fd; this
+    object's thread reads it and triggers `guard` (a guard condition of the spinning node),
+    so the executor wakes. Made and closed in the main thread.
+    """
+
+    def __init__(self, guard):
+        self._guard = guard
+        self._read, self._write = os.pipe()
+        os.set_blocking(self._write, False)  # set_wakeup_fd's requirement
+        self._previous = signal.set_wakeup_fd(self._write)
+        self._thread = threading.Thread(target=self._watch, name='signal_watch', daemon=True)
+        self._thread.start()
+
+    def _watch(self):
+        while True:
+            try:
+                data = os.read(self._read, 64)
+            except OSError:
+                return
+            if not data:  # close(): the write end is gone
+                return
+            _request_stop(data[0])
+            try:
+                self._guard.trigger()
+            except Exception:  # the node is being destroyed: it is stopping anyway
+                pass
+
+    def close(self):
+        """Stop writing to the pipe and end the thread."""
+        signal.set_wakeup_fd(self._previous)
+        os.close(self._write)
+        self._thread.join()
+        os.close(self._read)
 
 
 def _wants_help(argv):
@@ -81,7 +134,9 @@ def _init_rclpy(argv):
     with tempfile.TemporaryFile() as held:
         os.dup2(held.fileno(), 2)
         try:
-            rclpy.init(args=argv)
+            # Signals are node_main's (run()): rclpy's handler would shut the context
+            # down from its own thread, behind the executor's back.
+            rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
             error = None
         except Exception as failure:  # rclpy's own RCLError types for bad arguments
             lines = [line for line in str(failure).splitlines() if line.strip()]
@@ -103,7 +158,7 @@ def _init_rclpy(argv):
 def _shutdown_quietly():
     try:
         rclpy.try_shutdown()
-    except Exception:  # a signal shut rclpy down between its check and ours
+    except Exception:  # the node shut rclpy down itself between its check and ours
         pass
 
 
@@ -122,53 +177,52 @@ def run(node_class, args=None):
         sys.stdout.write(help_text(node_class.NODE_NAME, node_class.PARAMETERS,
                                    node_class.SUMMARY))
         return 0
+    # From here a signal is a request, carried out at the next of the checks below: rclpy
+    # starting or the node being built is never cut short (a context shut down while a
+    # service or a timer is being created can deadlock), and what was built is closed.
     install_quiet_signals()
-    # Ctrl-C and SIGTERM wait while rclpy starts and the node is built: rclpy shutting its
-    # context down while another thread creates a service or a timer can deadlock. Blocked
-    # here, in the main thread, before any other thread exists, the signals stay pending in
-    # every thread (DDS's and the node's inherit the mask) until the node spins.
-    _hold_signals(True)
     # The shared-memory segment is sized to what the node publishes, before parameters exist.
     dds.use_packaged_profile(node_class.PUBLISHES, argv, node_class.NODE_NAME)
     error = _init_rclpy(argv)
     if error is not None:
-        if _Stopping.requested:
+        if _Stopping.signum is not None:
             return 0
         sys.stderr.write('%s: invalid command line arguments: %s (see --help)\n' % (
             node_class.NODE_NAME, error))
         _shutdown_quietly()
         return 2
-    # Made now, while rclpy runs: an executor first made after a signal has shut rclpy down
-    # is left half-built, and Python complains about it at exit.
     executor = SingleThreadedExecutor()
-    _Stopping.rclpy_up = True
     node = None
     built = False
+    watch = None
     status = 0
     try:
-        # The object exists before its __init__ (which opens devices and ports) so that an
-        # interrupted start-up can still be cleaned up.
-        node = node_class.__new__(node_class)
-        node.__init__()
-        built = True
-        executor.add_node(node)
-        _hold_signals(False)  # a signal that came meanwhile is handled now
-        executor.spin()
+        # The object exists before its __init__ (which opens devices and ports) so that a
+        # start-up that fails half-way (ConfigError) can still be cleaned up.
+        if _Stopping.signum is None:  # else: stopped before there was anything to build
+            node = node_class.__new__(node_class)
+            node.__init__()
+            built = True
+            executor.add_node(node)
+            stop_guard = node.create_guard_condition(lambda: None)
+            _Stopping.wake = stop_guard.trigger
+            watch = SignalWatch(stop_guard)
+            _spin(executor)
     except ConfigError as error:
         logger = node.get_logger() if _has_logger(node) else get_logger(node_class.NODE_NAME)
         logger.error(str(error))
         status = 1
-    except (KeyboardInterrupt, ExternalShutdownException, SystemExit):
+    except ExternalShutdownException:  # the node shut rclpy down itself (a fatal error)
         pass
     except Exception:
-        if rclpy.ok() and not _Stopping.requested:
+        if rclpy.ok() and _Stopping.signum is None:
             raise
-        # rclpy was shut down by a signal while the node was being built or was spinning.
+        # rclpy was shut down under the executor (a node ending itself on a fatal error).
     finally:
-        _Stopping.cleaning = True
-        _Stopping.rclpy_up = False
         _ignore_signals()
-        _hold_signals(False)  # pending ones are ignored now
+        _Stopping.wake = None
+        if watch is not None:
+            watch.close()
         if node is not None:
             node.close()
             if built:
@@ -177,16 +231,20 @@ def run(node_class, args=None):
             executor.shutdown()
         except Exception:  # rclpy already tore it down with its context
             pass
+        if built and _Stopping.signum is not None:
+            node.get_logger().info('stopped by %s' % signal.Signals(_Stopping.signum).name)
         _shutdown_quietly()
     if getattr(node, 'failed', False):
         status = 1
     return status
 
 
-def _hold_signals(hold):
-    """Block (hold pending) or unblock SIGINT and SIGTERM in the calling thread."""
-    how = signal.SIG_BLOCK if hold else signal.SIG_UNBLOCK
-    signal.pthread_sigmask(how, {signal.SIGINT, signal.SIGTERM})
+def _spin(executor):
+    """Spin until a signal is received or rclpy is shut down."""
+    # spin_once() returns after every callback, the stop guard's included; the guard, which
+    # a signal triggers, only wakes an idle executor.
+    while _Stopping.signum is None and executor.context.ok():
+        executor.spin_once()
 
 
 def _ignore_signals():

@@ -21,10 +21,14 @@ from ros_harness import wait_until
 
 def _call(peer, node_name, service_type, service, request):
     client = peer.node.create_client(service_type, '/%s/%s' % (node_name, service))
-    assert client.wait_for_service(timeout_sec=20), 'no %s service on %s' % (service, node_name)
-    future = client.call_async(request)
-    wait_until(future.done, 20, what='%s reply from %s' % (service, node_name))
-    return future.result()
+    try:
+        assert client.wait_for_service(timeout_sec=20), 'no %s service on %s' % (
+            service, node_name)
+        future = client.call_async(request)
+        wait_until(future.done, 20, what='%s reply from %s' % (service, node_name))
+        return future.result()
+    finally:
+        peer.node.destroy_client(client)  # a test calling many times keeps one client at a time
 
 
 def parameter_value(value):

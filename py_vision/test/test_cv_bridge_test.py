@@ -303,3 +303,23 @@ def test_the_browser_page_shows_what_was_processed_and_skipped(launch, browser):
     assert float(shown['processing'].split()[0]) >= 300.0, shown
     assert float(shown['age-p99'].split()[0]) >= float(shown['age'].split()[0]), shown
     assert node.stop(signal.SIGINT) == 0
+
+
+def test_frames_larger_than_its_shared_memory_are_one_warning_naming_the_fix(launch, peer):
+    # Started on its own, it sizes its shared memory for the camera's default 640x480.
+    node = launch('cv_bridge_test')
+    probe = Probe(peer)
+    probe.wait_connected(node)
+    vga = np.zeros((480, 640, 3), np.uint8)
+    probe.publisher.publish(image_msg(vga, 'bgr8', 1))
+    probe.result_for(1)
+    assert 'do not fit the shared memory' not in node.output()
+    large = np.zeros((720, 1280, 3), np.uint8)
+    for stamp in (2, 3):
+        probe.publisher.publish(image_msg(large, 'bgr8', stamp))
+        probe.result_for(stamp, timeout=20.0)
+    warnings = [line for line in node.output().splitlines()
+                if 'do not fit the shared memory' in line]
+    assert len(warnings) == 1 and 'WARN' in warnings[0], node.output()
+    assert '-p image_width:=1280 -p image_height:=720' in warnings[0]
+    assert node.stop(signal.SIGINT) == 0

@@ -83,8 +83,12 @@ def test_segment_holds_the_frames_a_node_publishes_and_no_more():
     assert full_hd == vga * (1920 * 1080) // (640 * 480)
     # What it publishes unknown: as large as 1920x1080.
     assert dds.segment_size(None) == full_hd
-    # Told nothing, a node that republishes what it receives must assume large frames.
-    assert dds.segment_size(dds.INPUT_SIZE, [], 'cv_bridge_test') == full_hd
+    # Told nothing, a node that republishes what it receives assumes the camera's default
+    # size, as the camera does (a plain `ros2 run` does not pay 15 MiB for 1080p room) ...
+    assert dds.segment_size(dds.INPUT_SIZE, [], 'cv_bridge_test') == vga
+    # ... and can tell when the frames it gets are larger than that.
+    assert dds.frame_fits(VGA_BYTES, vga) and not dds.frame_fits(4 * VGA_BYTES, vga)
+    assert dds.frame_fits(4 * VGA_BYTES, full_hd)
     assert dds.segment_size(dds.INPUT_SIZE, [
         '--ros-args', '-p', 'image_width:=640', '-p', 'image_height:=480'],
         'cv_bridge_test') == vga
@@ -139,7 +143,6 @@ def test_localhost_settings_restrict_udp_to_loopback(tmp_path, monkeypatch):
 def test_user_settings_and_other_rmws_are_left_alone(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     for env in ({'FASTRTPS_DEFAULT_PROFILES_FILE': '/etc/mine.xml'},
-                {'FASTDDS_DEFAULT_PROFILES_FILE': '/etc/mine.xml'},
                 {'RMW_IMPLEMENTATION': 'rmw_cyclonedds_cpp'}):
         before = dict(env)
         assert dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher', env) is None
@@ -151,3 +154,15 @@ def test_user_settings_and_other_rmws_are_left_alone(tmp_path, monkeypatch):
     env = {}
     assert dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher', env) is None
     assert env == {}
+
+
+def test_fast_dds_3s_variable_alone_does_not_leave_nodes_on_the_small_default(
+        tmp_path, monkeypatch):
+    # Fast DDS 2.6 (Humble, the boards) and 2.14 (Jazzy) read FASTRTPS_DEFAULT_PROFILES_FILE
+    # only: a FASTDDS_DEFAULT_PROFILES_FILE alone configures nothing there.
+    monkeypatch.chdir(tmp_path)
+    env = {'FASTDDS_DEFAULT_PROFILES_FILE': '/etc/mine.xml'}
+    path = dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher', env)
+    assert path is not None and env['FASTRTPS_DEFAULT_PROFILES_FILE'] == path
+    assert segment(path) > dds.SMALL_SEGMENT
+    assert env['FASTDDS_DEFAULT_PROFILES_FILE'] == '/etc/mine.xml'

@@ -91,7 +91,29 @@ def test_a_directory_is_not_a_video_device(tmp_path):
 def test_a_file_opencv_cannot_read(tmp_path):
     path = tmp_path / 'notes.txt'
     path.write_text('not a video\n')
-    assert 'not a video file' in open_error(str(path))
+    error = open_error(str(path))
+    assert 'not a video file' in error and '\n' not in error
+    # Where this OpenCV lacks FFmpeg (the boards'), the error says what files depend on.
+    assert error.endswith(frame_source.video_file_support(cv2.getBuildInformation()))
+
+
+BUILD = """
+  Video I/O:
+    DC1394:                      NO
+    FFMPEG:                      %s
+      avcodec:                   YES (58.134.100)
+    GStreamer:                   %s
+    v4l/v4l2:                    YES (linux/videodev2.h)
+"""
+
+
+def test_an_opencv_without_ffmpeg_names_what_video_files_depend_on():
+    assert frame_source.video_file_support(BUILD % ('YES', 'NO')) == ''
+    assert frame_source.video_file_support(BUILD % ('YES', 'YES (1.20.3)')) == ''
+    gstreamer = frame_source.video_file_support(BUILD % ('NO', 'YES (1.20.3)'))
+    assert 'no FFmpeg' in gstreamer and 'GStreamer plugins' in gstreamer
+    neither = frame_source.video_file_support(BUILD % ('NO', 'NO'))
+    assert 'neither FFmpeg nor GStreamer' in neither and 'MJPEG .avi' in neither
 
 
 def test_an_unreadable_file_says_permission_denied(tmp_path, monkeypatch, video):
