@@ -27,6 +27,7 @@ raises ConfigError naming the parameter and what it accepts.
 
 from dataclasses import dataclass
 import math
+import string
 from typing import Any, Callable, Dict, Optional, Sequence, Tuple
 
 from rcl_interfaces.msg import (
@@ -54,7 +55,9 @@ class Spec:
     the user sets it (a camera control left at the camera's own value). `value_range` is
     inclusive; `choices` lists the accepted strings; `check` is any further condition, with
     `accepted` saying in words what passes it. A `live` parameter can be changed while the node
-    runs (`ros2 param set`); the others are read-only.
+    runs (`ros2 param set`); the others are read-only. A `control` is one of the camera's own
+    controls: its descriptor says so (CONTROL_MARK) and names its type, which a parameter that
+    is not set has no other way to show.
     """
 
     name: str
@@ -65,6 +68,11 @@ class Spec:
     check: Optional[Callable[[Any], bool]] = None
     accepted: str = ''
     live: bool = False
+    control: bool = False
+
+    # What marks a camera control in its descriptor (additional_constraints starts with it):
+    # the browser viewer's camera panel shows exactly these parameters as the camera's controls.
+    CONTROL_MARK = 'camera control'
 
     @property
     def kind(self) -> type:
@@ -126,6 +134,9 @@ class Spec:
         if not self.optional:
             descriptor.type = _TYPES[self.kind].value
         constraints = self.accepts() if (self.accepted or self.choices) else ''
+        if self.control:
+            constraints = '; '.join(filter(None, (
+                '%s, %s' % (self.CONTROL_MARK, _TYPE_NAMES[self.kind]), constraints)))
         descriptor.additional_constraints = constraints
         if self.value_range is not None:
             low, high = self.value_range
@@ -158,8 +169,15 @@ def help_text(executable: str, specs: Sequence[Spec], summary: str) -> str:
     return '\n'.join(lines) + '\n'
 
 
+_TOKEN_CHARACTERS = frozenset(string.ascii_letters + string.digits + '-_.~')
+
+
+def _good_token(token: str) -> bool:
+    return token == '' or (len(token) >= 16 and set(token) <= _TOKEN_CHARACTERS)
+
+
 def viewer_specs(display_default: str, displays: Sequence[str]) -> Tuple[Spec, ...]:
-    """Return the parameters of a node that shows frames: display, web_host, web_port."""
+    """Return the parameters of a node that shows frames: display, web_host, web_port..."""
     return (
         Spec('display', display_default, 'where to show frames: an OpenCV window, the browser '
              'viewer, nowhere, or auto (a window where possible, else the browser viewer)',
@@ -167,6 +185,9 @@ def viewer_specs(display_default: str, displays: Sequence[str]) -> Tuple[Spec, .
         Spec('web_host', '127.0.0.1', 'address the browser viewer listens on', check=bool,
              accepted='an IP address or host name'),
         Spec('web_port', 8080, 'port of the browser viewer (0: any free port)', (0, 65535)),
+        Spec('web_token', '', 'the token the browser viewer requires when web_host is not a '
+             'loopback address (empty: a random one at each start, logged as the URL to open)',
+             check=_good_token, accepted='empty, or at least 16 of A-Z a-z 0-9 - _ . ~'),
     )
 
 

@@ -55,7 +55,7 @@ def _control(name, kind, description, value_range=None):
     # Not set unless the user sets it: the camera keeps its own value. The range here is what
     # any UVC camera could accept; the camera's own range is checked when the value is applied.
     return Spec(name, kind, description + " (not set: the camera's own value)", value_range,
-                live=True)
+                live=True, control=True)
 
 
 _CONTROL_SPECS = (
