@@ -103,7 +103,7 @@ class Control:
     """One control as the panel shows it and GET /camera describes it."""
 
     name: str
-    type: Optional[str]            # 'bool', 'integer', 'double', 'string'; None: unknown yet
+    type: Optional[str]  # noqa: A003 'bool', 'integer', 'double', 'string'; None: not known
     value: Any                     # None: not set (the camera's own value)
     read_only: bool
     group: str                     # 'camera' (a camera control) or 'stream'
@@ -365,7 +365,7 @@ class CameraPanel:
                                                                           self._timeout))))
 
     def _refresh(self):
-        """Follow the graph: which node publishes the topic; re-read its parameters now and then."""
+        """Follow the graph: which node publishes the topic; re-read its parameters at times."""
         publishers = sorted({
             self._full_name(info.node_namespace, info.node_name)
             for info in self._node.get_publishers_info_by_topic(self._topic)} - {

@@ -50,9 +50,9 @@ import ipaddress
 import json
 import logging
 import math
+import secrets
 import select
 import socket
-import secrets
 from socketserver import ThreadingMixIn
 import threading
 import time
@@ -289,11 +289,11 @@ class _Handler(BaseHTTPRequestHandler):
         origin = self.headers.get('Origin')
         own = 'http://%s' % self.headers.get('Host', '')
         if (origin is not None and origin != own) or (origin is None and how == 'cookie'):
-            self._fail(403, 'a change must come from the viewer\'s own page (Origin %s, '
+            self._fail(403, "a change must come from the viewer's own page (Origin %s, "
                        'expected %s)' % (origin or 'missing', own))
             return
         if route != '/camera/controls':
-            self._fail(404 if route != '/camera' else 405, 'POST goes to /camera/controls')
+            self._fail(405, 'only /camera/controls takes a POST', [('Allow', 'GET, HEAD')])
             return
         values = self._json_body()
         if values is None:

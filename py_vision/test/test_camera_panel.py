@@ -172,8 +172,8 @@ def test_bad_requests_are_4xx_with_the_reason_and_the_node_stays_up(launch):
                                  {'Content-Type': content_type})
         assert status == expected, (body[:40], status, answer)
         assert words in answer['error'], (body[:40], answer)
-    status, _, answer = call(port, 'POST', '/camera', b'{}', {'Content-Type':
-                                                                'application/json'})
+    status, _, answer = call(port, 'POST', '/camera', b'{}',
+                             {'Content-Type': 'application/json'})
     assert status == 405
     # A page of another site cannot change anything (its Origin is not the viewer's).
     status, _, answer = post(port, {'brightness': 1}, {'Origin': 'http://evil.example'})

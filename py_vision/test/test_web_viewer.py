@@ -233,7 +233,10 @@ def test_head_and_unsupported_methods(make_viewer):
     viewer = make_viewer()
     status, headers, body = request(viewer, '/stats', 'HEAD')
     assert status == 200 and body == b'' and int(headers['content-length']) > 0
-    status, _, body = request(viewer, '/stats', 'POST')
+    status, headers, body = request(viewer, '/stats', 'POST')
+    assert status == 405 and headers['allow'] == 'GET, HEAD'
+    assert b'clients' not in body
+    status, _, body = request(viewer, '/stats', 'PUT')
     assert status == 501
     assert b'clients' not in body
 
