@@ -161,7 +161,8 @@ class Control:
         elif kind == 'integer':
             if isinstance(value, float) and math.isfinite(value) and value.is_integer():
                 value = int(value)
-            good = isinstance(value, int) and not isinstance(value, bool)
+            good = (isinstance(value, int) and not isinstance(value, bool) and
+                    -2 ** 63 <= value < 2 ** 63)
         elif kind == 'double':
             good = (isinstance(value, (int, float)) and not isinstance(value, bool) and
                     math.isfinite(value))

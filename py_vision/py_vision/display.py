@@ -95,10 +95,7 @@ class Display:
             except WebViewerError as error:
                 raise ConfigError(str(error))
             self.viewer = viewer
-            # The only place the token is ever written: the URL to open.
-            logger.info('browser viewer at %s%s' % (viewer.url, (
-                ' (needs this token: whoever has the URL can watch and tune the camera)'
-                if viewer.token else '')))
+            self._logger = logger
 
     def attach(self, node, stats, topic, camera_topic=None):
         """
@@ -112,6 +109,10 @@ class Display:
             if camera_topic is not None:
                 from py_vision.camera_panel import CameraPanel
                 self.viewer.set_camera(CameraPanel(node, camera_topic))
+            # Once the page is complete; the only place the token is ever written.
+            self._logger.info('browser viewer at %s%s' % (self.viewer.url, (
+                ' (needs this token: whoever has the URL can watch and tune the camera)'
+                if self.viewer.token else '')))
         if self.window_title is not None:
             # The window repaints and answers its close button also when no frame arrives.
             node.create_timer(WINDOW_EVENTS_PERIOD_S, lambda: cv2.waitKey(1))

@@ -303,6 +303,11 @@ class _Handler(BaseHTTPRequestHandler):
         except CameraError as error:
             self._fail(error.status, str(error))
             return
+        except Exception as error:  # a defect: say so, and keep serving
+            viewer._throttled('error', 'camera', 'viewer: setting controls failed: %s: %s' % (
+                type(error).__name__, error))
+            self._fail(500, 'setting the controls failed: %s' % type(error).__name__)
+            return
         self._send_json(200, {'results': results})
 
     def _json_body(self):
@@ -1002,7 +1007,11 @@ _PAGE = """<!DOCTYPE html>
   async function pollCamera() {
     try {
       const response = await fetch("/camera", { cache: "no-store" });
-      if (response.status === 404) { return; }  // this viewer has no camera panel
+      if (response.status === 404) {  // no camera panel (yet): ask again now and then
+        panel.hidden = true;
+        setTimeout(pollCamera, 5000);
+        return;
+      }
       if (response.ok) { renderCamera(await response.json()); }
     } catch (e) {
       // the node stopped: the status line says so; keep trying

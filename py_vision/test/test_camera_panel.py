@@ -162,6 +162,9 @@ def test_bad_requests_are_4xx_with_the_reason_and_the_node_stays_up(launch):
         (b'{"brightness": "bright"}', 'application/json', 400, 'an integer'),
         (b'{"brightness": true}', 'application/json', 400, 'an integer'),
         (b'{"brightness": 1.5}', 'application/json', 400, 'an integer'),
+        (b'{"brightness": 123456789012345678901234567890}', 'application/json', 400,
+         'an integer'),
+        (b'{"brightness": NaN}', 'application/json', 400, 'an integer'),
         (b'{"brightness": 1}', 'text/plain', 415, 'application/json'),
         (b'{"brightness": 1}', 'application/x-www-form-urlencoded', 415, 'application/json'),
         (b'{"x": "%s"}' % (b'a' * 100000), 'application/json', 413, 'at most'),
@@ -244,3 +247,93 @@ def test_web_token_sets_the_token(launch):
     assert bad.wait_exit(20) == 1
     assert re.search(r'web_token.*at least 16', bad.output())
     assert 'Traceback' not in bad.output()
+
+
+# What a control looks like to the panel, from descriptors written as the contract says
+# (no ROS graph: the descriptors are made here).
+
+def ros_value(value):
+    from param_client import parameter_value
+    return parameter_value(value)
+
+
+def descriptor(name, **fields):
+    from rcl_interfaces.msg import ParameterDescriptor
+    return ParameterDescriptor(name=name, **fields)
+
+
+def test_controls_are_read_from_descriptors_as_the_contract_writes_them():
+    from py_vision.camera_panel import Control, parse_menu
+    from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterValue
+
+    exposure = Control.from_descriptor(descriptor(
+        'auto_exposure', type=2, description='Auto Exposure; menu: 1=Manual Mode; '
+        '3=Aperture Priority Mode', additional_constraints='camera control, menu',
+        integer_range=[IntegerRange(from_value=0, to_value=3, step=1)]), ros_value(3))
+    assert exposure.to_json() == {
+        'type': 'integer', 'value': 3, 'min': 0, 'max': 3, 'step': 1, 'read_only': False,
+        'live': True, 'group': 'camera', 'description': exposure.description,
+        'menu': [{'value': 1, 'label': 'Manual Mode'},
+                 {'value': 3, 'label': 'Aperture Priority Mode'}]}
+
+    temperature = Control.from_descriptor(descriptor(
+        'white_balance_temperature', type=2, additional_constraints='camera control',
+        integer_range=[IntegerRange(from_value=2800, to_value=6500, step=10)]),
+        ros_value(4600))
+    assert (temperature.min, temperature.max, temperature.step) == (2800, 6500, 10)
+    assert temperature.menu is None
+
+    fixed = Control.from_descriptor(descriptor(
+        'exposure_time_absolute', type=2, read_only=True,
+        additional_constraints='camera control'), ros_value(156))
+    assert fixed.read_only and fixed.to_json()['live'] is False
+
+    switch = Control.from_descriptor(descriptor(
+        'focus_automatic_continuous', type=1, additional_constraints='camera control'),
+        ros_value(True))
+    assert switch.type == 'bool' and switch.value is True and switch.min is None
+
+    # Not set yet (usb_cam's names): dynamically typed, the type named after the mark.
+    unset = Control.from_descriptor(descriptor(
+        'autofocus', dynamic_typing=True, additional_constraints='camera control, bool'),
+        ParameterValue())
+    assert unset.type == 'bool' and unset.value is None
+    gain = Control.from_descriptor(descriptor(
+        'gain', dynamic_typing=True, additional_constraints='camera control, integer',
+        floating_point_range=[]), ParameterValue())
+    assert gain.type == 'integer'
+    zoom = Control.from_descriptor(descriptor(
+        'zoom', type=3, additional_constraints='camera control',
+        floating_point_range=[FloatingPointRange(from_value=1.0, to_value=4.0)]),
+        ros_value(1.0))
+    assert zoom.type == 'double' and (zoom.min, zoom.max) == (1.0, 4.0)
+
+    assert Control.from_descriptor(descriptor(
+        'framerate', type=3, additional_constraints='a number > 0'), ros_value(10.0)) is None
+    assert Control.from_descriptor(descriptor('jpeg_quality', type=2), ros_value(80)).group \
+        == 'stream'
+    assert parse_menu('no menu here') is None
+    assert parse_menu('Power Line Frequency; menu: 0=Disabled; 1=50 Hz; 2=60 Hz') == [
+        {'value': 0, 'label': 'Disabled'}, {'value': 1, 'label': '50 Hz'},
+        {'value': 2, 'label': '60 Hz'}]
+
+
+def test_a_value_of_the_wrong_type_is_refused_before_it_reaches_the_node():
+    from py_vision.camera_panel import Control
+    from py_vision.web_viewer import CameraError
+    from rcl_interfaces.msg import ParameterValue
+    import pytest
+
+    integer = Control('brightness', 'integer', None, False, 'camera')
+    assert integer.request_value(7).integer_value == 7
+    assert integer.request_value(7.0).integer_value == 7  # what JSON from JavaScript may hold
+    switch = Control('autofocus', 'bool', None, False, 'camera')
+    assert switch.request_value(False).type == 1
+    for control, value in ((integer, True), (integer, 1.5), (integer, '7'), (integer, None),
+                           (switch, 1), (switch, 'on'), (integer, float('nan'))):
+        with pytest.raises(CameraError) as refused:
+            control.request_value(value)
+        assert refused.value.status == 400 and control.name in str(refused.value)
+    unknown = Control('x', None, None, False, 'camera')
+    assert unknown.request_value(2).type == 2 and unknown.request_value(True).type == 1
+    assert isinstance(unknown.request_value('a'), ParameterValue)
