@@ -57,6 +57,8 @@ DIAGNOSTICS_STALE_S = 5.0
 INFO_PARAMETERS = ('video_device', 'pixel_format', 'framerate', 'image_width', 'image_height')
 # Live parameters of the publisher that are not camera controls but change what is shown.
 STREAM_SETTINGS = ('jpeg_quality',)
+# What a processing node subscribes to that leads to the camera upstream.
+IMAGE_TYPES = frozenset(('sensor_msgs/msg/Image', 'sensor_msgs/msg/CompressedImage'))
 
 _TYPE_NAMES = {ParameterType.PARAMETER_BOOL: 'bool', ParameterType.PARAMETER_INTEGER: 'integer',
                ParameterType.PARAMETER_DOUBLE: 'double', ParameterType.PARAMETER_STRING: 'string'}
@@ -255,6 +257,8 @@ class CameraPanel:
         self._generation = 0
         self._loading = False
         self._last_load = -math.inf
+        self._without_controls = set()  # publishers known to have no camera controls
+        self._via: List[str] = []
         self._jobs = collections.deque()
         self._wake = node.create_guard_condition(self._run_jobs)
         node.create_subscription(ParameterEvent, '/parameter_events', self._on_event,
@@ -272,7 +276,7 @@ class CameraPanel:
     def describe(self) -> Dict[str, Any]:
         """Return what the camera is and its controls (GET /camera)."""
         with self._lock:
-            publisher, publishers = self._publisher, list(self._publishers)
+            publisher, publishers, via = self._publisher, list(self._publishers), self._via
             controls = {name: c.to_json() for name, c in self._controls.items()}
             info, loaded, problem = dict(self._info), self._loaded, self._problem
             diagnostics = self._diagnostics
@@ -290,9 +294,12 @@ class CameraPanel:
             message = '%s has no camera controls' % publisher
         else:
             message = ''
+        if via:
+            message = ('the frames come through %s: this is the camera of %s. %s' % (
+                ' and '.join(via), publisher, message)).strip()
         if len(publishers) > 1 and publisher is not None:
             message = ('%d nodes publish %s (%s): this is %s. %s' % (
-                len(publishers), self._topic, ', '.join(publishers), publisher,
+                len(publishers), self._topic, ', '.join(publishers), publishers[0],
                 message)).strip()
         pixel_format = values.get('pixel format')
         if pixel_format is None and info.get('pixel_format') not in (None, 'auto'):
@@ -305,8 +312,9 @@ class CameraPanel:
             'requested_fps': _number(values.get('requested rate', info.get('framerate'))),
             'diagnostics': diagnostics is not None,
         }
-        return {'topic': self._topic, 'publisher': publisher, 'publishers': publishers,
-                'message': message, 'camera': camera, 'controls': controls}
+        return {'topic': self._topic, 'publisher': publisher, 'via': via,
+                'publishers': publishers, 'message': message, 'camera': camera,
+                'controls': controls}
 
     def set_controls(self, values: Dict[str, Any]) -> Dict[str, Any]:
         """Set name: value on the publisher; return name: {applied, reason} (POST)."""
@@ -365,13 +373,55 @@ class CameraPanel:
                                                                 '%g s' % (publisher,
                                                                           self._timeout))))
 
+    def _publishers_of(self, topic, *others):
+        """Return the nodes publishing topic (a graph name), but this one and others."""
+        if topic == self._topic:
+            infos = self._node.get_publishers_info_by_topic(topic)
+            names = {self._full_name(i.node_namespace, i.node_name) for i in infos}
+        else:
+            # get_publishers_info_by_topic() applies this node's remappings to the name it is
+            # given (the subscriber's usb_camera/image:=cv_bridge_image would turn the name
+            # up the pipeline back into the shown one): ask each node what it publishes.
+            names = set()
+            for name, namespace in self._node.get_node_names_and_namespaces():
+                try:
+                    topics = self._node.get_publisher_names_and_types_by_node(name, namespace)
+                except Exception:  # the node left the graph meanwhile
+                    continue
+                if any(published == topic for published, _ in topics):
+                    names.add(self._full_name(namespace, name))
+        return sorted(names - {self._own_name, *others})
+
+    def _upstream(self, publisher):
+        """Return the node publishing the images that publisher processes (or None)."""
+        namespace, _, name = publisher.rpartition('/')
+        try:
+            topics = self._node.get_subscriber_names_and_types_by_node(name, namespace or '/')
+        except Exception:  # the node left the graph between two calls
+            return None
+        for topic, types in sorted(topics):
+            if IMAGE_TYPES.intersection(types):
+                publishers = self._publishers_of(topic, publisher)
+                if publishers:
+                    return publishers[0]
+        return None
+
     def _refresh(self):
-        """Follow the graph: which node publishes the topic; re-read its parameters at times."""
-        publishers = sorted({
-            self._full_name(info.node_namespace, info.node_name)
-            for info in self._node.get_publishers_info_by_topic(self._topic)} - {
-                self._own_name})
+        """Follow the graph: which node's camera it is; re-read its parameters at times."""
+        publishers = self._publishers_of(self._topic)
         publisher = publishers[0] if publishers else None
+        # A processing node (cv_bridge_test) has no camera: the panel shows the camera of the
+        # images it processes, up the pipeline.
+        via, seen = [], set()
+        while publisher in self._without_controls and publisher not in seen:
+            seen.add(publisher)
+            upstream = self._upstream(publisher)
+            if upstream is None:
+                break
+            via.append(publisher)
+            publisher = upstream
+        with self._lock:
+            self._via = via
         if publisher != self._publisher:
             if self._calls is not None:
                 self._calls.destroy()
@@ -438,6 +488,9 @@ class CameraPanel:
             # Camera controls first, then the stream settings, each in the node's order.
             ordered = dict(sorted(controls.items(), key=lambda item: item[1].group != 'camera'))
             self._loading = False
+            if not any(c.group == 'camera' for c in controls.values()):
+                self._without_controls.add(self._publisher)
+                self._last_load = -math.inf  # look up the pipeline at the next refresh
             with self._lock:
                 self._controls, self._info = ordered, info
                 self._loaded, self._problem = True, ''

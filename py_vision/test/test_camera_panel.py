@@ -337,3 +337,57 @@ def test_a_value_of_the_wrong_type_is_refused_before_it_reaches_the_node():
     unknown = Control('x', None, None, False, 'camera')
     assert unknown.request_value(2).type == 2 and unknown.request_value(True).type == 1
     assert isinstance(unknown.request_value('a'), ParameterValue)
+
+
+def test_through_a_processing_node_the_panel_shows_the_camera_upstream(launch):
+    launch('usbcam_publisher', params={'video_device': 'synthetic', 'framerate': 15.0})
+    processing = launch('cv_bridge_test', params={'display': 'web', 'web_port': 0})
+    own_port = int(processing.wait_for_output(URL_LINE).group(1))
+    viewer = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0},
+                    remaps={'usb_camera/image': 'cv_bridge_image'}, name='viewer')
+    port = int(viewer.wait_for_output(URL_LINE).group(1))
+
+    state = wait_until(lambda: (lambda s: s if s['controls'] else None)(camera(port)), 30,
+                       interval=0.2, what='the camera controls behind cv_bridge_test')
+    assert state['topic'] == '/cv_bridge_image'
+    assert state['publisher'] == '/usbcam_publisher'
+    assert state['via'] == ['/cv_bridge_test']
+    assert 'cv_bridge_test' in state['message']
+    assert 'brightness' in state['controls']
+    # cv_bridge_test's own viewer shows the camera of its input.
+    own = wait_until(lambda: (lambda s: s if s['controls'] else None)(camera(own_port)), 30,
+                     interval=0.2, what='the controls in cv_bridge_test\'s viewer')
+    assert own['publisher'] == '/usbcam_publisher' and own['via'] == []
+    assert set(own['controls']) == set(state['controls'])
+
+
+def test_what_the_camera_is_comes_from_its_diagnostics_when_it_publishes_them(launch, peer):
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from sensor_msgs.msg import Image
+    # The peer stands in for a camera node: it publishes the topic and its diagnostics.
+    peer.node.create_publisher(Image, 'usb_camera/image', 10)
+    _, port, _ = start_viewer(launch)
+    state = wait_until(lambda: (lambda s: s if s['publisher'] else None)(camera(port)), 30,
+                       interval=0.2, what='the peer as the publisher')
+    assert state['publisher'] == '/test_peer'
+    wait_until(lambda: 'no camera controls' in camera(port)['message'], 15, interval=0.2,
+               what='"no camera controls" for a node without them')
+    assert camera(port)['camera'] == {'device': None, 'pixel_format': None, 'size': None,
+                                      'fps': None, 'requested_fps': None,
+                                      'diagnostics': False}
+
+    diagnostics = peer.node.create_publisher(DiagnosticArray, '/diagnostics', 10)
+    status = DiagnosticStatus(name='test_peer: camera', hardware_id='/dev/video4', values=[
+        KeyValue(key='device', value='/dev/video4'), KeyValue(key='pixel format', value='MJPEG'),
+        KeyValue(key='size', value='1280x720'), KeyValue(key='frame rate', value='29.8'),
+        KeyValue(key='requested rate', value='30.0')])
+    other = DiagnosticStatus(name='someone_else: camera', values=[
+        KeyValue(key='pixel format', value='YUYV')])
+
+    def shown():
+        diagnostics.publish(DiagnosticArray(status=[other, status]))
+        return camera(port)['camera']['diagnostics']
+    wait_until(shown, 15, interval=0.3, what='the diagnostics in GET /camera')
+    assert camera(port)['camera'] == {'device': '/dev/video4', 'pixel_format': 'MJPEG',
+                                      'size': '1280x720', 'fps': 29.8, 'requested_fps': 30.0,
+                                      'diagnostics': True}
