@@ -356,7 +356,7 @@ def test_through_a_processing_node_the_panel_shows_the_camera_upstream(launch):
     assert 'brightness' in state['controls']
     # cv_bridge_test's own viewer shows the camera of its input.
     own = wait_until(lambda: (lambda s: s if s['controls'] else None)(camera(own_port)), 30,
-                     interval=0.2, what='the controls in cv_bridge_test\'s viewer')
+                     interval=0.2, what="the controls in cv_bridge_test's viewer")
     assert own['publisher'] == '/usbcam_publisher' and own['via'] == []
     assert set(own['controls']) == set(state['controls'])
 
