@@ -706,16 +706,19 @@ _PAGE = """<!DOCTYPE html>
        overflow-wrap: anywhere; }
   .links { margin-top: 14px; font-size: 12px; color: var(--dim); }
   a { color: #8ab4f8; }
-  .side { display: flex; flex-direction: column; gap: 18px; flex: 0 0 330px; }
-  .side aside { flex: none; }
+  .column { display: flex; flex-direction: column; gap: 18px; flex: 0 1 auto; min-width: 320px; }
+  #stats { flex: none; }
+  #stats dl { grid-template-columns: auto 1fr auto 1fr; }
+  #panel { flex: 0 0 300px; }
   h2 { font-size: 14px; font-weight: 600; margin: 0 0 10px; }
   h3 { font-size: 12px; font-weight: 600; color: var(--dim); text-transform: uppercase;
        letter-spacing: .05em; margin: 14px 0 8px; }
   #panel-message { color: var(--dim); margin: 0 0 10px; }
   #panel-message:empty { display: none; }
   .control { display: grid; grid-template-columns: 1fr auto; gap: 2px 10px; margin: 0 0 10px; }
-  .control label { overflow-wrap: anywhere; }
+  .control label { overflow-wrap: break-word; }
   .control .value { color: var(--dim); font-variant-numeric: tabular-nums; text-align: right; }
+  .control input[type=checkbox] { margin: 0 0 0 8px; vertical-align: middle; }
   .control input[type=range], .control select, .control input[type=text] {
     grid-column: 1 / 3; width: 100%; }
   .control.unset input[type=range] { opacity: .45; }
@@ -731,11 +734,37 @@ _PAGE = """<!DOCTYPE html>
   <span id="status">connecting</span>
 </header>
 <main>
-  <div class="video">
-    <img id="video" src="/stream" alt="live video">
-    <div id="overlay" hidden></div>
+  <div class="column">
+    <div class="video">
+      <img id="video" src="/stream" alt="live video">
+      <div id="overlay" hidden></div>
+    </div>
+    <aside id="stats">
+      <h2>stream</h2>
+      <dl>
+        <dt>topic</dt><dd id="stat-topic">-</dd>
+        <dt>fps</dt><dd id="stat-fps">-</dd>
+        <dt>latency p50</dt><dd id="stat-latency">-</dd>
+        <dt>latency p99</dt><dd id="stat-latency-p99">-</dd>
+        <dt>resolution</dt><dd id="stat-resolution">-</dd>
+        <dt>encoding</dt><dd id="stat-encoding">-</dd>
+        <dt>frames</dt><dd id="stat-frames">-</dd>
+        <dt class="proc" hidden>frames in</dt><dd class="proc" id="stat-in" hidden>-</dd>
+        <dt class="proc" hidden>processed</dt><dd class="proc" id="stat-processed" hidden>-</dd>
+        <dt class="proc" hidden>skipped</dt><dd class="proc" id="stat-skipped" hidden>-</dd>
+        <dt class="proc" hidden>processing p50</dt>
+        <dd class="proc" id="stat-processing" hidden>-</dd>
+        <dt class="proc" hidden>processing p99</dt>
+        <dd class="proc" id="stat-processing-p99" hidden>-</dd>
+        <dt class="proc" hidden>output age p50</dt><dd class="proc" id="stat-age" hidden>-</dd>
+        <dt class="proc" hidden>output age p99</dt><dd class="proc" id="stat-age-p99" hidden>-</dd>
+        <dt>viewers</dt><dd id="stat-clients">-</dd>
+      </dl>
+      <div class="links"><button id="snapshot" type="button">snapshot</button>
+        <a href="/stats">stats JSON</a> &middot;
+        <a href="/camera">camera JSON</a></div>
+    </aside>
   </div>
-  <div class="side">
   <aside id="panel" hidden>
     <h2>camera</h2>
     <p id="panel-message"></p>
@@ -748,32 +777,6 @@ _PAGE = """<!DOCTYPE html>
     </dl>
     <div id="controls"></div>
   </aside>
-  <aside id="stats">
-    <h2>stream</h2>
-    <dl>
-      <dt>topic</dt><dd id="stat-topic">-</dd>
-      <dt>fps</dt><dd id="stat-fps">-</dd>
-      <dt>latency p50</dt><dd id="stat-latency">-</dd>
-      <dt>latency p99</dt><dd id="stat-latency-p99">-</dd>
-      <dt>resolution</dt><dd id="stat-resolution">-</dd>
-      <dt>encoding</dt><dd id="stat-encoding">-</dd>
-      <dt>frames</dt><dd id="stat-frames">-</dd>
-      <dt class="proc" hidden>frames in</dt><dd class="proc" id="stat-in" hidden>-</dd>
-      <dt class="proc" hidden>processed</dt><dd class="proc" id="stat-processed" hidden>-</dd>
-      <dt class="proc" hidden>skipped</dt><dd class="proc" id="stat-skipped" hidden>-</dd>
-      <dt class="proc" hidden>processing p50</dt>
-      <dd class="proc" id="stat-processing" hidden>-</dd>
-      <dt class="proc" hidden>processing p99</dt>
-      <dd class="proc" id="stat-processing-p99" hidden>-</dd>
-      <dt class="proc" hidden>output age p50</dt><dd class="proc" id="stat-age" hidden>-</dd>
-      <dt class="proc" hidden>output age p99</dt><dd class="proc" id="stat-age-p99" hidden>-</dd>
-      <dt>viewers</dt><dd id="stat-clients">-</dd>
-    </dl>
-    <div class="links"><button id="snapshot" type="button">snapshot</button>
-      <a href="/stats">stats JSON</a> &middot;
-      <a href="/camera">camera JSON</a></div>
-  </aside>
-  </div>
 </main>
 <script>
 "use strict";
@@ -918,7 +921,11 @@ _PAGE = """<!DOCTYPE html>
       input.addEventListener(event, function () { busy[name] = false; });
     });
     if (input.type === "checkbox") {
-      box.append(label, input, note);
+      value.appendChild(document.createTextNode(""));
+      const right = document.createElement("span");
+      right.className = "value";
+      right.append(value, input);
+      box.append(label, right, note);
     } else {
       box.append(label, value, input, note);
     }
