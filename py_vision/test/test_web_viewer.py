@@ -491,3 +491,12 @@ def test_a_failing_camera_side_is_a_500_and_the_viewer_keeps_serving(make_viewer
     viewer.set_camera(FakeCamera(fail=CameraError(504, '/cam did not answer within 3 s')))
     assert post_json(viewer, b'{"gain": 1}') == (504, {'error': '/cam did not answer within 3 s'})
     assert request(viewer, '/stats')[0] == 200
+
+
+def test_a_token_given_is_required_on_loopback_too(make_viewer):
+    viewer = make_viewer(token='a-token-of-16-chars')
+    assert viewer.url.endswith('/?token=a-token-of-16-chars')
+    assert request(viewer, '/stats')[0] == 401
+    status, headers, _ = request(viewer, '/?token=a-token-of-16-chars')
+    assert status == 303 and headers['location'] == '/'
+    assert headers['set-cookie'].startswith('py_vision_token_%d=' % viewer.port)
