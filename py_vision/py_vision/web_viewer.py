@@ -360,6 +360,8 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header('Content-Type', content_type)
         self.send_header('Cache-Control', 'no-store')
         self.send_header('X-Content-Type-Options', 'nosniff')
+        # No other page may frame this one (and trick its user into moving the controls).
+        self.send_header('X-Frame-Options', 'DENY')
         self.send_header('Connection', 'close')
         for name, value in extra:
             self.send_header(name, value)

@@ -481,6 +481,7 @@ def test_camera_routes_serve_the_camera_given_and_404_without(make_viewer):
     assert post_json(viewer, b'{"gain": 2}', 'Origin: http://evil.example\r\n')[0] == 403
     assert post_json(viewer, b'{"gain": 2}', 'Origin: http://localhost\r\n')[0] == 200
     assert camera.received == [{'gain': 1}, {'gain': 2}]
+    assert request(viewer, '/')[1]['x-frame-options'] == 'DENY'
 
 
 def test_a_failing_camera_side_is_a_500_and_the_viewer_keeps_serving(make_viewer):
