@@ -290,7 +290,7 @@ class CameraPanel:
             message = problem
         elif not loaded:
             message = 'reading the controls of %s' % publisher
-        elif not controls:
+        elif not any(c['group'] == 'camera' for c in controls.values()):
             message = '%s has no camera controls' % publisher
         else:
             message = ''
