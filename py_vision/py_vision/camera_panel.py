@@ -19,7 +19,7 @@ The camera panel's ROS side: the controls of the node that publishes the topic a
 through the standard parameter services (list, describe, get) and keeps them current from
 /parameter_events (a change made with `ros2 param set` shows at once) and a periodic re-read.
 A camera control is a parameter whose descriptor's additional_constraints starts with
-`Spec.CONTROL_MARK`; its range, step, menu and read-only flag come from that descriptor, so the
+`CONTROL_MARK`; its range, step, menu and read-only flag come from that descriptor, so the
 panel shows what the camera reports. What the camera is (device, pixel format, measured rate)
 comes from the publisher's parameters and, when it publishes them, its /diagnostics.
 
@@ -36,7 +36,6 @@ import threading
 import time
 from typing import Any, Dict, List, Optional, Tuple
 
-from py_vision.params import Spec
 from py_vision.web_viewer import CameraError
 from rcl_interfaces.msg import (
     Parameter as ParameterMsg, ParameterEvent, ParameterType, ParameterValue)
@@ -49,6 +48,9 @@ try:
 except ImportError:  # a system without diagnostic_msgs: the panel shows what it knows without
     DiagnosticArray = None
 
+# The contract with the camera's node: additional_constraints starting with these words mark a
+# camera control (docs/panel.md, "Which parameters are controls").
+CONTROL_MARK = 'camera control'
 CALL_TIMEOUT_S = 3.0
 REFRESH_PERIOD_S = 1.0
 RELOAD_PERIOD_S = 5.0
@@ -119,7 +121,7 @@ class Control:
     def from_descriptor(cls, descriptor, value: ParameterValue) -> Optional['Control']:
         """Return the Control a descriptor describes, or None when it is neither kind."""
         constraints = descriptor.additional_constraints
-        if constraints.startswith(Spec.CONTROL_MARK):
+        if constraints.startswith(CONTROL_MARK):
             group = 'camera'
         elif descriptor.name in STREAM_SETTINGS:
             group = 'stream'
@@ -128,7 +130,7 @@ class Control:
         kind = _TYPE_NAMES.get(descriptor.type) or _TYPE_NAMES.get(value.type)
         if kind is None:
             # Not set and dynamically typed: the control's type is named after the mark.
-            words = constraints[len(Spec.CONTROL_MARK):].split(';')[0].replace(',', ' ')
+            words = constraints[len(CONTROL_MARK):].split(';')[0].replace(',', ' ')
             kind = next((word for word in words.split() if word in _TYPE_OF_NAME), None)
         control = cls(descriptor.name, kind, python_value(value), bool(descriptor.read_only),
                       group, descriptor.description, menu=parse_menu(descriptor.description))
@@ -470,7 +472,7 @@ class CameraPanel:
             if not current():
                 return
             wanted = [d for d in response.descriptors if d.name in INFO_PARAMETERS or
-                      d.additional_constraints.startswith(Spec.CONTROL_MARK) or
+                      d.additional_constraints.startswith(CONTROL_MARK) or
                       d.name in STREAM_SETTINGS]
             calls.call('get', GetParameters.Request(names=[d.name for d in wanted]),
                        lambda reply: got(wanted, reply), failed)

@@ -55,9 +55,9 @@ class Spec:
     the user sets it (a camera control left at the camera's own value). `value_range` is
     inclusive; `choices` lists the accepted strings; `check` is any further condition, with
     `accepted` saying in words what passes it. A `live` parameter can be changed while the node
-    runs (`ros2 param set`); the others are read-only. A `control` is one of the camera's own
-    controls: its descriptor says so (CONTROL_MARK) and names its type, which a parameter that
-    is not set has no other way to show.
+    runs (`ros2 param set`); the others are read-only. `step` is an integer range's step and
+    `constraints`, when given, the descriptor's additional_constraints (a camera control says
+    what it is there).
     """
 
     name: str
@@ -68,11 +68,8 @@ class Spec:
     check: Optional[Callable[[Any], bool]] = None
     accepted: str = ''
     live: bool = False
-    control: bool = False
-
-    # What marks a camera control in its descriptor (additional_constraints starts with it):
-    # the browser viewer's camera panel shows exactly these parameters as the camera's controls.
-    CONTROL_MARK = 'camera control'
+    step: int = 1
+    constraints: str = ''
 
     @property
     def kind(self) -> type:
@@ -111,6 +108,8 @@ class Spec:
         if self.value_range is not None:
             low, high = self.value_range
             good = good and low <= value <= high
+            if kind is int and self.step > 1:
+                good = good and (value - low) % self.step == 0
         if self.choices and value not in self.choices:
             good = False
         if self.check is not None and good:
@@ -134,15 +133,12 @@ class Spec:
         if not self.optional:
             descriptor.type = _TYPES[self.kind].value
         constraints = self.accepts() if (self.accepted or self.choices) else ''
-        if self.control:
-            constraints = '; '.join(filter(None, (
-                '%s, %s' % (self.CONTROL_MARK, _TYPE_NAMES[self.kind]), constraints)))
-        descriptor.additional_constraints = constraints
+        descriptor.additional_constraints = self.constraints or constraints
         if self.value_range is not None:
             low, high = self.value_range
             if self.kind is int:
                 descriptor.integer_range = [IntegerRange(
-                    from_value=int(low), to_value=int(high), step=1)]
+                    from_value=int(low), to_value=int(high), step=self.step)]
             elif self.kind is float:
                 descriptor.floating_point_range = [FloatingPointRange(
                     from_value=float(low), to_value=float(high), step=0.0)]
