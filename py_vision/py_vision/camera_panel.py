@@ -32,6 +32,7 @@ import collections
 import concurrent.futures
 from dataclasses import dataclass
 import math
+import re
 import threading
 import time
 from typing import Any, Dict, List, Optional, Tuple
@@ -66,6 +67,8 @@ _TYPE_NAMES = {ParameterType.PARAMETER_BOOL: 'bool', ParameterType.PARAMETER_INT
                ParameterType.PARAMETER_DOUBLE: 'double', ParameterType.PARAMETER_STRING: 'string'}
 _TYPE_OF_NAME = {name: kind for kind, name in _TYPE_NAMES.items()}
 _MENU_MARK = 'menu: '
+_ALIAS = re.compile(r'\bname for ([A-Za-z0-9_]+)')
+_INACTIVE = re.compile(r'\binactive (while [^;]*)')
 
 
 def python_value(value: ParameterValue) -> Any:
@@ -116,6 +119,8 @@ class Control:
     max: Optional[float] = None    # noqa: A003
     step: Optional[float] = None
     menu: Optional[List[Dict[str, Any]]] = None
+    alias_of: Optional[str] = None  # another name of that control (usb_cam's names)
+    inactive: Optional[str] = None  # why the camera ignores it now ('while ...')
 
     @classmethod
     def from_descriptor(cls, descriptor, value: ParameterValue) -> Optional['Control']:
@@ -134,6 +139,12 @@ class Control:
             kind = next((word for word in words.split() if word in _TYPE_OF_NAME), None)
         control = cls(descriptor.name, kind, python_value(value), bool(descriptor.read_only),
                       group, descriptor.description, menu=parse_menu(descriptor.description))
+        if group == 'camera':
+            # Optional words after the mark: 'name for <control>' (an alias), 'inactive while'.
+            alias = _ALIAS.search(constraints)
+            inactive = _INACTIVE.search(constraints)
+            control.alias_of = alias.group(1) if alias else None
+            control.inactive = inactive.group(1).strip() if inactive else None
         if descriptor.integer_range:
             bounds = descriptor.integer_range[0]
             control.min, control.max = bounds.from_value, bounds.to_value
@@ -151,7 +162,8 @@ class Control:
         return {'type': self.type, 'value': self.value, 'min': self.min, 'max': self.max,
                 'step': self.step, 'menu': self.menu, 'read_only': self.read_only,
                 'live': not self.read_only, 'group': self.group,
-                'description': self.description}
+                'description': self.description, 'alias_of': self.alias_of,
+                'inactive': self.inactive}
 
     def request_value(self, value: Any) -> ParameterValue:
         """Return value as this control's ParameterValue; raise CameraError(400) if mistyped."""
@@ -515,7 +527,9 @@ class CameraPanel:
                     self._info[parameter.name] = python_value(parameter.value)
                 else:
                     reload = True  # a new parameter: it may be a control (a new camera)
-            reload = reload or any(p.name in self._controls for p in event.deleted_parameters)
+            # Any change may change what else is active (automatic exposure on: the exposure
+            # time is inactive), which only the descriptors say: re-read them at the next tick.
+            reload = reload or bool(event.changed_parameters) or bool(event.deleted_parameters)
         if reload:
             self._last_load = -math.inf
 

@@ -726,6 +726,9 @@ _PAGE = """<!DOCTYPE html>
   .control.unset input[type=range] { opacity: .45; }
   .control .note { grid-column: 1 / 3; color: var(--bad); font-size: 12px; }
   .control .note:empty { display: none; }
+  .control .why { grid-column: 1 / 3; color: var(--dim); font-size: 12px; }
+  .control .why:empty { display: none; }
+  .control.inactive label { color: var(--dim); }
   button { background: #303134; color: var(--fg); border: 1px solid var(--line);
            border-radius: 6px; padding: 6px 12px; font: inherit; cursor: pointer; }
 </style>
@@ -879,6 +882,8 @@ _PAGE = """<!DOCTYPE html>
     value.className = "value";
     const note = document.createElement("span");
     note.className = "note";
+    const why = document.createElement("span");
+    why.className = "why";
     let input;
     if (c.menu) {
       input = document.createElement("select");
@@ -927,11 +932,11 @@ _PAGE = """<!DOCTYPE html>
       const right = document.createElement("span");
       right.className = "value";
       right.append(value, input);
-      box.append(label, right, note);
+      box.append(label, right, why, note);
     } else {
-      box.append(label, value, input, note);
+      box.append(label, value, input, why, note);
     }
-    widgets[name] = { box: box, input: input, value: value, note: note, spec: c };
+    widgets[name] = { box: box, input: input, value: value, note: note, why: why, spec: c };
     return box;
   }
 
@@ -939,6 +944,8 @@ _PAGE = """<!DOCTYPE html>
     const w = widgets[name];
     w.spec = c;
     w.box.classList.toggle("unset", c.value === null);
+    w.box.classList.toggle("inactive", Boolean(c.inactive));
+    w.why.textContent = c.inactive ? "inactive " + c.inactive : "";
     w.value.textContent = describeValue(c, c.value);
     if (busy[name] || name in queued) { return; }
     if (w.input.type === "checkbox") {
@@ -966,7 +973,12 @@ _PAGE = """<!DOCTYPE html>
     if (typeof shown.fps === "number") { rates.push(shown.fps.toFixed(1) + " fps shown"); }
     if (typeof info.fps === "number") { rates.push(info.fps.toFixed(1) + " fps at the camera"); }
     show("cam-rate", rates.join(", ") || "-");
-    const controls = cam.controls || {};
+    // A control under a second name (usb_cam's) is shown once, under the camera's name.
+    const all = cam.controls || {};
+    const controls = {};
+    Object.keys(all).forEach(function (n) {
+      if (!(all[n].alias_of && all[n].alias_of in all)) { controls[n] = all[n]; }
+    });
     const key = JSON.stringify(Object.keys(controls).map(function (n) {
       const c = controls[n];
       return [n, c.type, c.min, c.max, c.step, c.menu, c.read_only, c.group];

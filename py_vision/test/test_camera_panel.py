@@ -274,14 +274,26 @@ def test_controls_are_read_from_descriptors_as_the_contract_writes_them():
         'type': 'integer', 'value': 3, 'min': 0, 'max': 3, 'step': 1, 'read_only': False,
         'live': True, 'group': 'camera', 'description': exposure.description,
         'menu': [{'value': 1, 'label': 'Manual Mode'},
-                 {'value': 3, 'label': 'Aperture Priority Mode'}]}
+                 {'value': 3, 'label': 'Aperture Priority Mode'}],
+        'alias_of': None, 'inactive': None}
 
     temperature = Control.from_descriptor(descriptor(
         'white_balance_temperature', type=2, additional_constraints='camera control',
         integer_range=[IntegerRange(from_value=2800, to_value=6500, step=10)]),
         ros_value(4600))
     assert (temperature.min, temperature.max, temperature.step) == (2800, 6500, 10)
-    assert temperature.menu is None
+    assert temperature.menu is None and temperature.inactive is None
+
+    # Optional words after the mark: why a control is inactive, and another name of one.
+    held = Control.from_descriptor(descriptor(
+        'exposure_time_absolute', type=2, additional_constraints='camera control 0x009a0902 '
+        '(int, step 1, default 156); inactive while auto_exposure is 3 (automatic)',
+        integer_range=[IntegerRange(from_value=3, to_value=2047, step=1)]), ros_value(156))
+    assert held.inactive == 'while auto_exposure is 3 (automatic)'
+    alias = Control.from_descriptor(descriptor(
+        'exposure', type=2, additional_constraints='camera control: usb_cam name for '
+        'exposure_time_absolute'), ros_value(156))
+    assert alias.alias_of == 'exposure_time_absolute' and alias.inactive is None
 
     fixed = Control.from_descriptor(descriptor(
         'exposure_time_absolute', type=2, read_only=True,
