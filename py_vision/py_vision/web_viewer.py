@@ -729,6 +729,8 @@ _PAGE = """<!DOCTYPE html>
   .control .why { grid-column: 1 / 3; color: var(--dim); font-size: 12px; }
   .control .why:empty { display: none; }
   .control.inactive label { color: var(--dim); }
+  select, input[type=text] { background: #303134; color: var(--fg); border: 1px solid var(--line);
+                             border-radius: 4px; padding: 2px 4px; font: inherit; }
   button { background: #303134; color: var(--fg); border: 1px solid var(--line);
            border-radius: 6px; padding: 6px 12px; font: inherit; cursor: pointer; }
 </style>
