@@ -67,6 +67,8 @@ _TYPE_NAMES = {ParameterType.PARAMETER_BOOL: 'bool', ParameterType.PARAMETER_INT
                ParameterType.PARAMETER_DOUBLE: 'double', ParameterType.PARAMETER_STRING: 'string'}
 _TYPE_OF_NAME = {name: kind for kind, name in _TYPE_NAMES.items()}
 _MENU_MARK = 'menu: '
+_LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
+_STATUS = ' status'  # the diagnostics' level and message, under a key no value can have
 _ALIAS = re.compile(r'\bname for ([A-Za-z0-9_]+)')
 _INACTIVE = re.compile(r'\binactive (while [^;]*)')
 
@@ -324,6 +326,7 @@ class CameraPanel:
             'size': values.get('size'),
             'fps': _number(values.get('frame rate')),
             'requested_fps': _number(values.get('requested rate', info.get('framerate'))),
+            'status': values.get(_STATUS),
             'diagnostics': diagnostics is not None,
         }
         return {'topic': self._topic, 'publisher': publisher, 'via': via,
@@ -542,6 +545,8 @@ class CameraPanel:
             if owner in names and any(item.key == 'pixel format' for item in status.values):
                 values = {item.key: item.value for item in status.values}
                 values.setdefault('device', status.hardware_id)
+                level = status.level[0] if isinstance(status.level, bytes) else status.level
+                values[_STATUS] = '%s: %s' % (_LEVELS.get(level, level), status.message)
                 with self._lock:
                     self._diagnostics = (self._clock(), values)
 

@@ -781,6 +781,7 @@ _PAGE = """<!DOCTYPE html>
       <dt>format</dt><dd id="cam-format">-</dd>
       <dt>size</dt><dd id="cam-size">-</dd>
       <dt>rate</dt><dd id="cam-rate">-</dd>
+      <dt>status</dt><dd id="cam-status">-</dd>
     </dl>
     <div id="controls"></div>
   </aside>
@@ -975,6 +976,7 @@ _PAGE = """<!DOCTYPE html>
     if (typeof shown.fps === "number") { rates.push(shown.fps.toFixed(1) + " fps shown"); }
     if (typeof info.fps === "number") { rates.push(info.fps.toFixed(1) + " fps at the camera"); }
     show("cam-rate", rates.join(", ") || "-");
+    show("cam-status", info.status || "-");
     // A control under a second name (usb_cam's) is shown once, under the camera's name.
     const all = cam.controls || {};
     const controls = {};

@@ -385,14 +385,16 @@ def test_what_the_camera_is_comes_from_its_diagnostics_when_it_publishes_them(la
     wait_until(lambda: 'no camera controls' in camera(port)['message'], 15, interval=0.2,
                what='"no camera controls" for a node without them')
     assert camera(port)['camera'] == {'device': None, 'pixel_format': None, 'size': None,
-                                      'fps': None, 'requested_fps': None,
+                                      'fps': None, 'requested_fps': None, 'status': None,
                                       'diagnostics': False}
 
     diagnostics = peer.node.create_publisher(DiagnosticArray, '/diagnostics', 10)
-    status = DiagnosticStatus(name='test_peer: camera', hardware_id='/dev/video4', values=[
+    values = [
         KeyValue(key='device', value='/dev/video4'), KeyValue(key='pixel format', value='MJPEG'),
         KeyValue(key='size', value='1280x720'), KeyValue(key='frame rate', value='29.8'),
-        KeyValue(key='requested rate', value='30.0')])
+        KeyValue(key='requested rate', value='30.0')]
+    status = DiagnosticStatus(name='test_peer: camera', hardware_id='/dev/video4', level=b'\x01',
+                              message='29.8 fps, requested 30.0', values=values)
     other = DiagnosticStatus(name='someone_else: camera', values=[
         KeyValue(key='pixel format', value='YUYV')])
 
@@ -402,4 +404,5 @@ def test_what_the_camera_is_comes_from_its_diagnostics_when_it_publishes_them(la
     wait_until(shown, 15, interval=0.3, what='the diagnostics in GET /camera')
     assert camera(port)['camera'] == {'device': '/dev/video4', 'pixel_format': 'MJPEG',
                                       'size': '1280x720', 'fps': 29.8, 'requested_fps': 30.0,
+                                      'status': 'WARN: 29.8 fps, requested 30.0',
                                       'diagnostics': True}
