@@ -13,16 +13,21 @@
 # limitations under the License.
 
 """
-Make docs/viewer.png: the browser viewer watching the synthetic camera.
+Make docs/viewer.png (or, with --panel, docs/panel.png): the browser viewer and its camera panel.
 
 Runs the installed usbcam_publisher (video_device:=synthetic) and usbcam_subscriber
 (display:=web) on a private ROS domain, opens the page in headless Chromium and saves a
-screenshot once the stats are live. Needs `scripts/setup.sh --test` and Debian's `chromium`.
+screenshot once the stats are live. With --panel the viewer listens as on a headless board
+(web_host:=0.0.0.0, opened through its token URL), the brightness slider is moved first and
+the whole panel is in the picture. Needs `scripts/setup.sh --test` and Debian's `chromium`
+(or CHROMIUM=/path/to/chromium).
 
-Usage: .venv/bin/python scripts/screenshot_viewer.py [output.png]
+Usage: .venv/bin/python scripts/screenshot_viewer.py [--panel] [output.png]
 """
 
+import os
 from pathlib import Path
+import re
 import shutil
 import sys
 import tempfile
@@ -39,8 +44,12 @@ CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic'
 
 
 def main():
-    output = Path(sys.argv[1]) if len(sys.argv) > 1 else REPO / 'docs' / 'viewer.png'
-    chromium = shutil.which('chromium') or shutil.which('chromium-browser')
+    args = sys.argv[1:]
+    panel = '--panel' in args
+    args = [arg for arg in args if arg != '--panel']
+    output = Path(args[0]) if args else REPO / 'docs' / ('panel.png' if panel else 'viewer.png')
+    chromium = (os.environ.get('CHROMIUM') or shutil.which('chromium') or
+                shutil.which('chromium-browser'))
     if chromium is None:
         sys.exit('chromium is not installed (apt-get install chromium)')
     domain = ros_harness.DomainId()
@@ -53,16 +62,25 @@ def main():
         ros_harness.NodeProcess('usbcam_publisher', ros_harness.ros_args(
             {'video_device': 'synthetic', 'framerate': 15.0}), env),
         ros_harness.NodeProcess('usbcam_subscriber', ros_harness.ros_args(
-            {'display': 'web', 'web_port': 0}), env),
+            dict({'display': 'web', 'web_port': 0}, **(
+                {'web_host': '0.0.0.0'} if panel else {}))), env),
     ]
     try:
-        url = nodes[1].wait_for_output(r'viewer at (http://\S+:\d+/)').group(1)
+        url = nodes[1].wait_for_output(r'viewer at (http://\S+:\d+/\S*)').group(1)
+        # The page as a laptop on the network sees it (the host name resolves to this machine).
+        url = re.sub(r'^http://[^/]+:', 'http://127.0.0.1:', url)
         with sync_playwright() as playwright, tempfile.TemporaryDirectory() as profile:
             browser = playwright.chromium.launch_persistent_context(
                 profile, executable_path=chromium, headless=True, args=CHROMIUM_ARGS,
-                viewport={'width': 1000, 'height': 590}, device_scale_factor=1)
+                viewport={'width': 1100, 'height': 930} if panel else {
+                    'width': 1000, 'height': 790}, device_scale_factor=1)
             page = browser.new_page()
             page.goto(url)
+            if panel:
+                slider = page.locator('#input-brightness')
+                slider.wait_for(state='visible', timeout=30000)
+                box = slider.bounding_box()
+                page.mouse.click(box['x'] + box['width'] * 0.6, box['y'] + box['height'] / 2)
             # Wait for a full stats window, so fps and latency are steady numbers.
             ros_harness.wait_until(
                 lambda: page.locator('#stat-frames').inner_text() not in ('', '-') and

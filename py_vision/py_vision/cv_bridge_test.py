@@ -123,7 +123,7 @@ class CvBridgeTest(Node):
 
         self.bridge_ = CvBridge()
         self.display = Display(self.get_logger(), values['display'], values['web_host'],
-                               values['web_port'], 'cv_bridge_image')
+                               values['web_port'], 'cv_bridge_image', values['web_token'])
         # Reliable with a queue of 10, the ROS 2 default: what the seed's rospy publisher
         # gives, and both reliable and best-effort subscribers (rqt_image_view) receive it.
         self.images = ImagePublisher(self, 'cv_bridge_image', publisher_qos(), self.bridge_,
@@ -143,7 +143,9 @@ class CvBridgeTest(Node):
         # OpenCV windows belong to the executor's thread: the worker hands frames over.
         self._show_request = self.create_guard_condition(self._show_newest)
         self.create_timer(STATS_PERIOD_S, self.report_stats)
-        self.display.attach(self, self.stats, self.publisher_.topic_name)
+        # The panel shows the camera these frames come from, upstream of this node.
+        self.display.attach(self, self.stats, self.publisher_.topic_name,
+                            camera_topic=self.subscription_.topic_name)
         self.get_logger().info('drawing on images from %s, publishing them on %s%s' % (
             self.subscription_.topic_name, self.publisher_.topic_name,
             self._work_note(self.simulated_work_s)))

@@ -69,7 +69,7 @@ def window_unavailable_reason():
 class Display:
     """Shows bgr8 frames in the way the `display` parameter asks for."""
 
-    def __init__(self, logger, mode, web_host, web_port, title):
+    def __init__(self, logger, mode, web_host, web_port, title, web_token=''):
         self.window_title = None
         self.viewer = None
         if mode in ('auto', 'window'):
@@ -88,19 +88,31 @@ class Display:
             # Imported only here: the HTTP server brings OpenSSL along (about 7 MB of memory
             # per process, bench/bench_memory.py), which a node that shows nothing never needs.
             from py_vision.web_viewer import WebViewer, WebViewerError
-            viewer = WebViewer(web_host, web_port, title='py_vision: %s' % title, logger=logger)
+            viewer = WebViewer(web_host, web_port, title='py_vision: %s' % title, logger=logger,
+                               token=web_token)
             try:
                 viewer.start()
             except WebViewerError as error:
                 raise ConfigError(str(error))
             self.viewer = viewer
-            logger.info('browser viewer at %s' % viewer.url)
+            self._logger = logger
 
-    def attach(self, node, stats, topic):
-        """Start the node's timers: the viewer's statistics of topic, the window's events."""
+    def attach(self, node, stats, topic, camera_topic=None):
+        """
+        Start the node's timers: the viewer's statistics of topic, the window's events.
+
+        With camera_topic, the viewer's camera panel shows the camera of the node publishing it.
+        """
         if self.viewer is not None:
             node.create_timer(WEB_STATS_PERIOD_S, lambda: self.viewer.set_stats(
                 dict(stats.snapshot(), topic=topic)))
+            if camera_topic is not None:
+                from py_vision.camera_panel import CameraPanel
+                self.viewer.set_camera(CameraPanel(node, camera_topic))
+            # Once the page is complete; the only place the token is ever written.
+            self._logger.info('browser viewer at %s%s' % (self.viewer.url, (
+                ' (needs this token: whoever has the URL can watch and tune the camera)'
+                if self.viewer.token else '')))
         if self.window_title is not None:
             # The window repaints and answers its close button also when no frame arrives.
             node.create_timer(WINDOW_EVENTS_PERIOD_S, lambda: cv2.waitKey(1))

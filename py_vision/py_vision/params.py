@@ -27,6 +27,7 @@ raises ConfigError naming the parameter and what it accepts.
 
 from dataclasses import dataclass
 import math
+import string
 from typing import Any, Callable, Dict, Optional, Sequence, Tuple
 
 from rcl_interfaces.msg import (
@@ -54,7 +55,9 @@ class Spec:
     the user sets it (a camera control left at the camera's own value). `value_range` is
     inclusive; `choices` lists the accepted strings; `check` is any further condition, with
     `accepted` saying in words what passes it. A `live` parameter can be changed while the node
-    runs (`ros2 param set`); the others are read-only.
+    runs (`ros2 param set`); the others are read-only. `step` is an integer range's step and
+    `constraints`, when given, the descriptor's additional_constraints (a camera control says
+    what it is there).
     """
 
     name: str
@@ -65,6 +68,8 @@ class Spec:
     check: Optional[Callable[[Any], bool]] = None
     accepted: str = ''
     live: bool = False
+    step: int = 1
+    constraints: str = ''
 
     @property
     def kind(self) -> type:
@@ -103,6 +108,8 @@ class Spec:
         if self.value_range is not None:
             low, high = self.value_range
             good = good and low <= value <= high
+            if kind is int and self.step > 1:
+                good = good and (value - low) % self.step == 0
         if self.choices and value not in self.choices:
             good = False
         if self.check is not None and good:
@@ -126,12 +133,12 @@ class Spec:
         if not self.optional:
             descriptor.type = _TYPES[self.kind].value
         constraints = self.accepts() if (self.accepted or self.choices) else ''
-        descriptor.additional_constraints = constraints
+        descriptor.additional_constraints = self.constraints or constraints
         if self.value_range is not None:
             low, high = self.value_range
             if self.kind is int:
                 descriptor.integer_range = [IntegerRange(
-                    from_value=int(low), to_value=int(high), step=1)]
+                    from_value=int(low), to_value=int(high), step=self.step)]
             elif self.kind is float:
                 descriptor.floating_point_range = [FloatingPointRange(
                     from_value=float(low), to_value=float(high), step=0.0)]
@@ -158,8 +165,15 @@ def help_text(executable: str, specs: Sequence[Spec], summary: str) -> str:
     return '\n'.join(lines) + '\n'
 
 
+_TOKEN_CHARACTERS = frozenset(string.ascii_letters + string.digits + '-_.~')
+
+
+def _good_token(token: str) -> bool:
+    return token == '' or (len(token) >= 16 and set(token) <= _TOKEN_CHARACTERS)
+
+
 def viewer_specs(display_default: str, displays: Sequence[str]) -> Tuple[Spec, ...]:
-    """Return the parameters of a node that shows frames: display, web_host, web_port."""
+    """Return the parameters of a node that shows frames: display, web_host, web_port..."""
     return (
         Spec('display', display_default, 'where to show frames: an OpenCV window, the browser '
              'viewer, nowhere, or auto (a window where possible, else the browser viewer)',
@@ -167,6 +181,9 @@ def viewer_specs(display_default: str, displays: Sequence[str]) -> Tuple[Spec, .
         Spec('web_host', '127.0.0.1', 'address the browser viewer listens on', check=bool,
              accepted='an IP address or host name'),
         Spec('web_port', 8080, 'port of the browser viewer (0: any free port)', (0, 65535)),
+        Spec('web_token', '', 'the token the browser viewer requires when web_host is not a '
+             'loopback address (empty: a random one at each start, logged as the URL to open)',
+             check=_good_token, accepted='empty, or at least 16 of A-Z a-z 0-9 - _ . ~'),
     )
 
 

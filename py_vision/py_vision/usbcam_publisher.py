@@ -54,8 +54,11 @@ IMAGE_TOPIC = 'usb_camera/image'
 def _control(name, kind, description, value_range=None):
     # Not set unless the user sets it: the camera keeps its own value. The range here is what
     # any UVC camera could accept; the camera's own range is checked when the value is applied.
+    # The mark tells the browser viewer's camera panel it is a control, and its type (a
+    # parameter that is not set has no other way to show it).
     return Spec(name, kind, description + " (not set: the camera's own value)", value_range,
-                live=True)
+                live=True, constraints='camera control, %s' % (
+                    'bool' if kind is bool else 'integer'))
 
 
 _CONTROL_SPECS = (

@@ -65,11 +65,12 @@ class VideoSubscriber(Node):
         self._last_error = ''
         compressed = values['image_transport'] == 'compressed'
         self.display = Display(self.get_logger(), values['display'], values['web_host'],
-                               values['web_port'], IMAGE_TOPIC)
+                               values['web_port'], IMAGE_TOPIC, values['web_token'])
         self.subscription_ = subscribe(self, IMAGE_TOPIC, values['image_transport'],
                                        self.on_compressed if compressed else self.callback)
         self._stats_timer = self.create_timer(self.stats_period, self.report_stats)
-        self.display.attach(self, self.stats, self.subscription_.topic_name)
+        self.display.attach(self, self.stats, self.subscription_.topic_name,
+                            camera_topic=self.subscription_.topic_name)
 
     def _set_stats_period(self, period):
         self.stats_period = period

@@ -17,10 +17,22 @@ The browser viewer: live images over HTTP, with the standard library only (no RO
 
 Routes, and nothing else (no file is ever served from disk):
 
-- ``GET /``             a self-contained page: the live video and the live stats
+- ``GET /``             a self-contained page: the live video, the live stats, the camera panel
 - ``GET /stream``       MJPEG (``multipart/x-mixed-replace``), always the newest frame
 - ``GET /snapshot.jpg`` the newest frame as one JPEG (503 until the first frame arrives)
 - ``GET /stats``        the stats given to ``set_stats()`` plus the viewer's own, as JSON
+- ``GET /camera``       what the camera is and its controls, from the `CameraAccess` given to
+  ``set_camera()`` (404 without one), as JSON
+- ``POST /camera/controls`` a JSON object of control name: value, handed to the CameraAccess;
+  the answer says per control whether it was applied and why not
+
+Access: bound to a loopback address (127.0.0.0/8, ::1, localhost) and with no token given,
+the viewer answers only requests whose Host names a loopback address (a web page cannot reach
+it through a rebound DNS name). Anywhere else every request needs the token: ``?token=`` in
+the URL once (the page then keeps it in an HttpOnly, SameSite=Strict cookie), or an
+``Authorization: Bearer`` header. A POST must come from the page's own origin (its ``Origin``
+equal to its ``Host``), or, authenticated by the header, carry no ``Origin``; its body must be
+JSON (``Content-Type: application/json``) and small.
 
 ``submit()`` only stores a reference to the image and wakes the clients: a frame is encoded
 to JPEG once, when the first client wants it, and never when nobody watches. Every client has
@@ -30,16 +42,22 @@ ones get a short 503 answer.
 """
 
 import errno
+import hmac
 import html
+from http.cookies import CookieError, SimpleCookie
 from http.server import BaseHTTPRequestHandler, HTTPServer
+import ipaddress
 import json
 import logging
 import math
+import secrets
 import select
 import socket
 from socketserver import ThreadingMixIn
 import threading
 import time
+from typing import Any, Dict, Optional, Protocol
+from urllib.parse import parse_qs
 
 import cv2
 import numpy as np
@@ -53,10 +71,47 @@ _IDLE_CHECK = 1.0
 # tab's stats poll, small enough to bound the threads a misbehaving client can make us start.
 _EXTRA_CONNECTIONS = 16
 _WILDCARD_HOSTS = ('', '0.0.0.0', '::')
+# The largest request body taken (a POST of controls is a few hundred bytes).
+MAX_BODY = 16384
 
 
 class WebViewerError(Exception):
     """The viewer cannot serve (the address is in use or unusable); the message says why."""
+
+
+class CameraError(Exception):
+    """A camera request that cannot be done: `status` is the HTTP status, the message why."""
+
+    def __init__(self, status: int, message: str):
+        super().__init__(message)
+        self.status = status
+
+
+class CameraAccess(Protocol):
+    """What the camera panel needs from the side that reaches the camera (over ROS)."""
+
+    def describe(self) -> Dict[str, Any]:
+        """Return what the camera is and its controls, JSON-able (see docs/panel.md)."""
+
+    def set_controls(self, values: Dict[str, Any]) -> Dict[str, Any]:
+        """Apply name: value; return name: {applied, reason}; raise CameraError if none can."""
+
+
+def is_loopback(host: str) -> bool:
+    """Return True when host (an address or name to bind) is this machine's loopback."""
+    if host.lower() == 'localhost':
+        return True
+    try:
+        return ipaddress.ip_address(host.strip('[]')).is_loopback
+    except ValueError:
+        return False
+
+
+def _host_name(host_header: str) -> str:
+    """Return the name part of a Host header ('[::1]:8080' -> '::1', 'a:80' -> 'a')."""
+    if host_header.startswith('['):
+        return host_header[1:].split(']', 1)[0]
+    return host_header.rsplit(':', 1)[0] if host_header.count(':') == 1 else host_header
 
 
 class _ThrottledLog:
@@ -131,7 +186,7 @@ class _Server(ThreadingMixIn, HTTPServer):
 
 
 class _Handler(BaseHTTPRequestHandler):
-    """Serves the four routes of one connection, then closes it."""
+    """Serves the routes of one connection, then closes it."""
 
     protocol_version = 'HTTP/1.1'
     timeout = _SOCKET_TIMEOUT
@@ -139,12 +194,66 @@ class _Handler(BaseHTTPRequestHandler):
     def version_string(self):
         return 'py_vision'
 
+    def _route(self):
+        """Return (route, query): the target as the client sent it, split at '?'."""
+        # http.server folds a leading '//' in self.path; exact matches only: '//stream',
+        # '/stream/', '/../x', '/%2e%2e/' are all 404.
+        target = self.requestline.split()[1]
+        route, _, query = target.split('#', 1)[0].partition('?')
+        return route, query
+
+    def _authenticate(self, route, query):
+        """
+        Return how the request is authenticated ('local', 'cookie', 'bearer', 'query').
+
+        None when it is not: the refusal has been sent (or, for the page opened with its
+        token, the cookie and the redirect to the clean URL).
+        """
+        viewer = self.server.viewer
+        if viewer.token is None:
+            host = self.headers.get('Host')
+            if host is not None and not is_loopback(_host_name(host)):
+                self._fail(403, 'this viewer answers only to localhost: open it as %s' % (
+                    viewer.url))
+                return None
+            return 'local'
+        try:
+            given = parse_qs(query).get('token', [None])[0]
+        except ValueError:
+            given = None
+        if given is not None and self.command in ('GET', 'HEAD'):
+            if not viewer.check_token(given):
+                self._fail(401, 'wrong token: open the URL the node logged at its start')
+                return None
+            if route != '/':
+                return 'query'
+            # The page keeps the token in a cookie no script can read or send to another site;
+            # the redirect takes it out of the address bar and the history.
+            self._send(303, 'text/plain; charset=utf-8', b'See /\n', [
+                ('Location', '/'), ('Set-Cookie', '%s=%s; HttpOnly; SameSite=Strict; Path=/' % (
+                    viewer.cookie_name, viewer.token))])
+            return None
+        authorization = self.headers.get('Authorization', '')
+        if authorization[:7].lower() == 'bearer ':
+            if viewer.check_token(authorization[7:].strip()):
+                return 'bearer'
+        else:
+            try:
+                morsel = SimpleCookie(self.headers.get('Cookie', '')).get(viewer.cookie_name)
+            except CookieError:
+                morsel = None
+            if morsel is not None and viewer.check_token(morsel.value):
+                return 'cookie'
+        self._fail(401, 'this viewer needs its token: open the URL the node logged at its '
+                   'start (http://...?token=...), or send "Authorization: Bearer <token>"',
+                   [('WWW-Authenticate', 'Bearer realm="py_vision"')])
+        return None
+
     def do_GET(self):  # noqa: N802 (the name http.server looks for)
         viewer = self.server.viewer
-        # The target as the client sent it (http.server folds a leading '//' in self.path);
-        # exact matches only: '//stream', '/stream/', '/../x', '/%2e%2e/' are all 404.
-        target = self.requestline.split()[1]
-        route = target.split('?', 1)[0].split('#', 1)[0]
+        route, query = self._route()
+        if self._authenticate(route, query) is None:
+            return
         if route == '/':
             self._send(200, 'text/html; charset=utf-8', viewer._page)
         elif route == '/stats':
@@ -159,10 +268,84 @@ class _Handler(BaseHTTPRequestHandler):
                 self._send(200, 'image/jpeg', jpeg)
         elif route == '/stream':
             self._stream()
+        elif route == '/camera':
+            try:
+                self._send_json(200, viewer.camera_state())
+            except CameraError as error:
+                self._fail(error.status, str(error))
         else:
             self._send(404, 'text/plain; charset=utf-8', b'Not found.\n')
 
     do_HEAD = do_GET  # noqa: N815 (same answers, _send() leaves the body out)
+
+    def do_POST(self):  # noqa: N802 (the name http.server looks for)
+        viewer = self.server.viewer
+        route, query = self._route()
+        how = self._authenticate(route, query)
+        if how is None:
+            return
+        # A cross-site page can make a browser send a POST with the cookie, never with the
+        # header, and never with a forged Origin: the Origin must be the page's own.
+        origin = self.headers.get('Origin')
+        own = 'http://%s' % self.headers.get('Host', '')
+        if (origin is not None and origin != own) or (origin is None and how == 'cookie'):
+            self._fail(403, "a change must come from the viewer's own page (Origin %s, "
+                       'expected %s)' % (origin or 'missing', own))
+            return
+        if route != '/camera/controls':
+            self._fail(405, 'only /camera/controls takes a POST', [('Allow', 'GET, HEAD')])
+            return
+        values = self._json_body()
+        if values is None:
+            return
+        try:
+            results = viewer.set_controls(values)
+        except CameraError as error:
+            self._fail(error.status, str(error))
+            return
+        except Exception as error:  # a defect: say so, and keep serving
+            viewer._throttled('error', 'camera', 'viewer: setting controls failed: %s: %s' % (
+                type(error).__name__, error))
+            self._fail(500, 'setting the controls failed: %s' % type(error).__name__)
+            return
+        self._send_json(200, {'results': results})
+
+    def _json_body(self):
+        """Return the request's JSON object, or None when a refusal has been sent."""
+        if 'chunked' in self.headers.get('Transfer-Encoding', '').lower():
+            self._fail(411, 'send the body with a Content-Length')
+            return None
+        try:
+            length = int(self.headers.get('Content-Length', ''))
+        except ValueError:
+            self._fail(411, 'send the body with a Content-Length')
+            return None
+        if length > MAX_BODY or length < 0:
+            self._fail(413, 'the body is %d bytes; at most %d are taken' % (length, MAX_BODY))
+            return None
+        content_type = self.headers.get('Content-Type', '').split(';')[0].strip().lower()
+        if content_type != 'application/json':
+            self._fail(415, 'the body must be JSON (Content-Type: application/json), got %s' % (
+                content_type or 'no Content-Type'))
+            return None
+        body = self.rfile.read(length)
+        try:
+            values = json.loads(body.decode('utf-8'))
+        except (UnicodeDecodeError, ValueError) as error:
+            self._fail(400, 'the body is not JSON: %s' % error)
+            return None
+        if not isinstance(values, dict) or not values:
+            self._fail(400, 'the body must be a JSON object of control name: value, '
+                       'e.g. {"brightness": 10}')
+            return None
+        return values
+
+    def _send_json(self, code, value, extra=()):
+        self._send(code, 'application/json', json.dumps(_json_safe(value)).encode(), extra)
+
+    def _fail(self, code, reason, extra=()):
+        """Refuse the request: JSON {"error": reason} with the status."""
+        self._send_json(code, {'error': reason}, extra)
 
     def send_error(self, code, message=None, explain=None):
         # Replaces http.server's HTML error page (bad request line, unsupported method...).
@@ -177,6 +360,8 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header('Content-Type', content_type)
         self.send_header('Cache-Control', 'no-store')
         self.send_header('X-Content-Type-Options', 'nosniff')
+        # No other page may frame this one (and trick its user into moving the controls).
+        self.send_header('X-Frame-Options', 'DENY')
         self.send_header('Connection', 'close')
         for name, value in extra:
             self.send_header(name, value)
@@ -240,7 +425,13 @@ class WebViewer:
     """Serve the newest submitted image to any number of browsers (up to max_clients)."""
 
     def __init__(self, host='127.0.0.1', port=8080, *, max_clients=8, jpeg_quality=80,
-                 title='py_vision', logger=None):
+                 title='py_vision', logger=None, token=''):
+        """
+        Make a viewer for host:port; nothing is bound before start().
+
+        token: what every request must carry. Empty: none on a loopback host, and a random
+        one (see `url`) on any other.
+        """
         if not 1 <= int(max_clients):
             raise ValueError('max_clients must be at least 1, got %r' % max_clients)
         if not 0 <= int(jpeg_quality) <= 100:
@@ -252,6 +443,11 @@ class WebViewer:
         self._logger = logger if logger is not None else logging.getLogger(__name__)
         self._throttled = _ThrottledLog(self._logger)
         self._page = _page(title)
+        if token:
+            self.token = token
+        else:
+            self.token = None if is_loopback(host) else secrets.token_urlsafe(24)
+        self._camera: Optional[CameraAccess] = None
 
         self._frame_lock = threading.Condition()
         self._frame = None
@@ -297,11 +493,51 @@ class WebViewer:
 
     @property
     def url(self):
-        """Return the address to open in a browser; the host name when bound to all interfaces."""
+        """
+        Return the address to open in a browser, with the token when one is needed.
+
+        The host name when bound to all interfaces.
+        """
         host = socket.gethostname() if self.host in _WILDCARD_HOSTS else self.host
         if ':' in host:
             host = '[%s]' % host
-        return 'http://%s:%d/' % (host, self.port)
+        url = 'http://%s:%d/' % (host, self.port)
+        return url + ('?token=' + self.token if self.token else '')
+
+    @property
+    def cookie_name(self):
+        """Return the cookie the page keeps the token in (one per port: cookies ignore ports)."""
+        return 'py_vision_token_%d' % self.port
+
+    def check_token(self, given):
+        """Return True when given is the token (in constant time)."""
+        return self.token is not None and hmac.compare_digest(
+            given.encode('utf-8', 'replace'), self.token.encode())
+
+    def set_camera(self, camera: Optional[CameraAccess]):
+        """Serve /camera and /camera/controls from camera (None: 404, no panel on the page)."""
+        self._camera = camera
+
+    def camera_state(self):
+        """Return GET /camera's answer: the camera's, with the size and rate of what is shown."""
+        camera = self._camera
+        if camera is None:
+            raise CameraError(404, 'this viewer has no camera panel')
+        state = dict(camera.describe())
+        with self._lock:
+            stats = dict(self._stats)
+        shown = {'topic': stats.get('topic'), 'fps': stats.get('fps')}
+        if stats.get('width') and stats.get('height'):
+            shown['size'] = '%dx%d' % (stats['width'], stats['height'])
+        state['shown'] = shown
+        return _json_safe(state)
+
+    def set_controls(self, values):
+        """Apply POST /camera/controls; return name: {applied, reason}."""
+        camera = self._camera
+        if camera is None:
+            raise CameraError(404, 'this viewer has no camera panel')
+        return camera.set_controls(values)
 
     def submit(self, image):
         """
@@ -472,6 +708,31 @@ _PAGE = """<!DOCTYPE html>
        overflow-wrap: anywhere; }
   .links { margin-top: 14px; font-size: 12px; color: var(--dim); }
   a { color: #8ab4f8; }
+  .column { display: flex; flex-direction: column; gap: 18px; flex: 0 1 auto; min-width: 320px; }
+  #stats { flex: none; }
+  #stats dl { grid-template-columns: auto 1fr auto 1fr; }
+  #panel { flex: 0 0 300px; }
+  h2 { font-size: 14px; font-weight: 600; margin: 0 0 10px; }
+  h3 { font-size: 12px; font-weight: 600; color: var(--dim); text-transform: uppercase;
+       letter-spacing: .05em; margin: 14px 0 8px; }
+  #panel-message { color: var(--dim); margin: 0 0 10px; }
+  #panel-message:empty { display: none; }
+  .control { display: grid; grid-template-columns: 1fr auto; gap: 2px 10px; margin: 0 0 10px; }
+  .control label { overflow-wrap: break-word; }
+  .control .value { color: var(--dim); font-variant-numeric: tabular-nums; text-align: right; }
+  .control input[type=checkbox] { margin: 0 0 0 8px; vertical-align: middle; }
+  .control input[type=range], .control select, .control input[type=text] {
+    grid-column: 1 / 3; width: 100%; }
+  .control.unset input[type=range] { opacity: .45; }
+  .control .note { grid-column: 1 / 3; color: var(--bad); font-size: 12px; }
+  .control .note:empty { display: none; }
+  .control .why { grid-column: 1 / 3; color: var(--dim); font-size: 12px; }
+  .control .why:empty { display: none; }
+  .control.inactive label { color: var(--dim); }
+  select, input[type=text] { background: #303134; color: var(--fg); border: 1px solid var(--line);
+                             border-radius: 4px; padding: 2px 4px; font: inherit; }
+  button { background: #303134; color: var(--fg); border: 1px solid var(--line);
+           border-radius: 6px; padding: 6px 12px; font: inherit; cursor: pointer; }
 </style>
 </head>
 <body>
@@ -480,32 +741,49 @@ _PAGE = """<!DOCTYPE html>
   <span id="status">connecting</span>
 </header>
 <main>
-  <div class="video">
-    <img id="video" src="/stream" alt="live video">
-    <div id="overlay" hidden></div>
+  <div class="column">
+    <div class="video">
+      <img id="video" src="/stream" alt="live video">
+      <div id="overlay" hidden></div>
+    </div>
+    <aside id="stats">
+      <h2>stream</h2>
+      <dl>
+        <dt>topic</dt><dd id="stat-topic">-</dd>
+        <dt>fps</dt><dd id="stat-fps">-</dd>
+        <dt>latency p50</dt><dd id="stat-latency">-</dd>
+        <dt>latency p99</dt><dd id="stat-latency-p99">-</dd>
+        <dt>resolution</dt><dd id="stat-resolution">-</dd>
+        <dt>encoding</dt><dd id="stat-encoding">-</dd>
+        <dt>frames</dt><dd id="stat-frames">-</dd>
+        <dt class="proc" hidden>frames in</dt><dd class="proc" id="stat-in" hidden>-</dd>
+        <dt class="proc" hidden>processed</dt><dd class="proc" id="stat-processed" hidden>-</dd>
+        <dt class="proc" hidden>skipped</dt><dd class="proc" id="stat-skipped" hidden>-</dd>
+        <dt class="proc" hidden>processing p50</dt>
+        <dd class="proc" id="stat-processing" hidden>-</dd>
+        <dt class="proc" hidden>processing p99</dt>
+        <dd class="proc" id="stat-processing-p99" hidden>-</dd>
+        <dt class="proc" hidden>output age p50</dt><dd class="proc" id="stat-age" hidden>-</dd>
+        <dt class="proc" hidden>output age p99</dt><dd class="proc" id="stat-age-p99" hidden>-</dd>
+        <dt>viewers</dt><dd id="stat-clients">-</dd>
+      </dl>
+      <div class="links"><button id="snapshot" type="button">snapshot</button>
+        <a href="/stats">stats JSON</a> &middot;
+        <a href="/camera">camera JSON</a></div>
+    </aside>
   </div>
-  <aside>
+  <aside id="panel" hidden>
+    <h2>camera</h2>
+    <p id="panel-message"></p>
     <dl>
-      <dt>topic</dt><dd id="stat-topic">-</dd>
-      <dt>fps</dt><dd id="stat-fps">-</dd>
-      <dt>latency p50</dt><dd id="stat-latency">-</dd>
-      <dt>latency p99</dt><dd id="stat-latency-p99">-</dd>
-      <dt>resolution</dt><dd id="stat-resolution">-</dd>
-      <dt>encoding</dt><dd id="stat-encoding">-</dd>
-      <dt>frames</dt><dd id="stat-frames">-</dd>
-      <dt class="proc" hidden>frames in</dt><dd class="proc" id="stat-in" hidden>-</dd>
-      <dt class="proc" hidden>processed</dt><dd class="proc" id="stat-processed" hidden>-</dd>
-      <dt class="proc" hidden>skipped</dt><dd class="proc" id="stat-skipped" hidden>-</dd>
-      <dt class="proc" hidden>processing p50</dt>
-      <dd class="proc" id="stat-processing" hidden>-</dd>
-      <dt class="proc" hidden>processing p99</dt>
-      <dd class="proc" id="stat-processing-p99" hidden>-</dd>
-      <dt class="proc" hidden>output age p50</dt><dd class="proc" id="stat-age" hidden>-</dd>
-      <dt class="proc" hidden>output age p99</dt><dd class="proc" id="stat-age-p99" hidden>-</dd>
-      <dt>viewers</dt><dd id="stat-clients">-</dd>
+      <dt>node</dt><dd id="cam-node">-</dd>
+      <dt>device</dt><dd id="cam-device">-</dd>
+      <dt>format</dt><dd id="cam-format">-</dd>
+      <dt>size</dt><dd id="cam-size">-</dd>
+      <dt>rate</dt><dd id="cam-rate">-</dd>
+      <dt>status</dt><dd id="cam-status">-</dd>
     </dl>
-    <div class="links"><a href="/snapshot.jpg" download>snapshot</a> &middot;
-      <a href="/stats">stats JSON</a></div>
+    <div id="controls"></div>
   </aside>
 </main>
 <script>
@@ -575,6 +853,206 @@ _PAGE = """<!DOCTYPE html>
     setTimeout(poll, 1000);
   }
   poll();
+
+  // The camera panel: what the camera is and its controls, from GET /camera once a second
+  // (a change made elsewhere shows within a second); a change is sent at once, and while a
+  // slider moves at most one request per control is on its way.
+  const panel = document.getElementById("panel");
+  const controlsBox = document.getElementById("controls");
+  let layout = null;
+  const widgets = {};
+  const busy = {};
+  const queued = {};
+
+  function describeValue(c, value) {
+    if (value === null || value === undefined) { return "camera\u2019s own value"; }
+    if (c.menu) {
+      const entry = c.menu.find(function (m) { return m.value === value; });
+      return entry ? entry.label : String(value);
+    }
+    if (typeof value === "boolean") { return value ? "on" : "off"; }
+    return String(value);
+  }
+
+  function makeControl(name, c) {
+    const box = document.createElement("div");
+    box.className = "control";
+    box.id = "control-" + name;
+    const label = document.createElement("label");
+    label.textContent = name.replace(/_/g, " ");
+    label.title = c.description || "";
+    const value = document.createElement("span");
+    value.className = "value";
+    const note = document.createElement("span");
+    note.className = "note";
+    const why = document.createElement("span");
+    why.className = "why";
+    let input;
+    if (c.menu) {
+      input = document.createElement("select");
+      const own = document.createElement("option");
+      own.value = "";
+      own.textContent = "camera\u2019s own value";
+      own.disabled = true;
+      input.appendChild(own);
+      c.menu.forEach(function (m) {
+        const option = document.createElement("option");
+        option.value = String(m.value);
+        option.textContent = m.label;
+        input.appendChild(option);
+      });
+    } else if (c.type === "bool") {
+      input = document.createElement("input");
+      input.type = "checkbox";
+    } else if (typeof c.min === "number" && typeof c.max === "number") {
+      input = document.createElement("input");
+      input.type = "range";
+      input.min = c.min;
+      input.max = c.max;
+      input.step = c.step > 0 ? c.step : (c.type === "integer" ? 1 : "any");
+    } else {
+      input = document.createElement("input");
+      input.type = "text";
+    }
+    input.name = name;
+    input.disabled = c.read_only;
+    label.htmlFor = input.id = "input-" + name;
+    input.addEventListener("pointerdown", function () { busy[name] = true; });
+    input.addEventListener(input.type === "range" ? "input" : "change", function () {
+      let v;
+      if (input.type === "checkbox") { v = input.checked; }
+      else if (c.type === "integer") { v = parseInt(input.value, 10); }
+      else if (c.type === "double") { v = parseFloat(input.value); }
+      else { v = input.value; }
+      value.textContent = describeValue(c, v);
+      send(name, v);
+    });
+    ["change", "pointerup", "pointercancel"].forEach(function (event) {
+      input.addEventListener(event, function () { busy[name] = false; });
+    });
+    if (input.type === "checkbox") {
+      value.appendChild(document.createTextNode(""));
+      const right = document.createElement("span");
+      right.className = "value";
+      right.append(value, input);
+      box.append(label, right, why, note);
+    } else {
+      box.append(label, value, input, why, note);
+    }
+    widgets[name] = { box: box, input: input, value: value, note: note, why: why, spec: c };
+    return box;
+  }
+
+  function showValue(name, c) {
+    const w = widgets[name];
+    w.spec = c;
+    w.box.classList.toggle("unset", c.value === null);
+    w.box.classList.toggle("inactive", Boolean(c.inactive));
+    w.why.textContent = c.inactive ? "inactive " + c.inactive : "";
+    w.value.textContent = describeValue(c, c.value);
+    if (busy[name] || name in queued) { return; }
+    if (w.input.type === "checkbox") {
+      w.input.indeterminate = c.value === null;
+      w.input.checked = c.value === true;
+    } else if (w.input.tagName === "SELECT") {
+      w.input.value = c.value === null ? "" : String(c.value);
+    } else if (c.value !== null) {
+      w.input.value = String(c.value);
+    } else if (w.input.type === "range") {
+      w.input.value = String((Number(c.min) + Number(c.max)) / 2);
+    }
+  }
+
+  function renderCamera(cam) {
+    panel.hidden = false;
+    show("panel-message", cam.message || "");
+    const info = cam.camera || {};
+    const shown = cam.shown || {};
+    show("cam-node", cam.publisher || "-");
+    show("cam-device", info.device || "-");
+    show("cam-format", info.pixel_format || "-");
+    show("cam-size", info.size || shown.size || "-");
+    const rates = [];
+    if (typeof shown.fps === "number") { rates.push(shown.fps.toFixed(1) + " fps shown"); }
+    if (typeof info.fps === "number") { rates.push(info.fps.toFixed(1) + " fps at the camera"); }
+    show("cam-rate", rates.join(", ") || "-");
+    show("cam-status", info.status || "-");
+    // A control under a second name (usb_cam's) is shown once, under the camera's name.
+    const all = cam.controls || {};
+    const controls = {};
+    Object.keys(all).forEach(function (n) {
+      if (!(all[n].alias_of && all[n].alias_of in all)) { controls[n] = all[n]; }
+    });
+    const key = JSON.stringify(Object.keys(controls).map(function (n) {
+      const c = controls[n];
+      return [n, c.type, c.min, c.max, c.step, c.menu, c.read_only, c.group];
+    }));
+    if (key !== layout) {
+      layout = key;
+      controlsBox.textContent = "";
+      Object.keys(widgets).forEach(function (n) { delete widgets[n]; });
+      let group = null;
+      Object.keys(controls).forEach(function (n) {
+        if (controls[n].group !== group) {
+          group = controls[n].group;
+          const h = document.createElement("h3");
+          h.textContent = group === "stream" ? "stream settings" : "controls";
+          controlsBox.appendChild(h);
+        }
+        controlsBox.appendChild(makeControl(n, controls[n]));
+      });
+    }
+    Object.keys(controls).forEach(function (n) { showValue(n, controls[n]); });
+  }
+
+  async function send(name, v) {
+    queued[name] = v;
+    if (busy[name + "/sending"]) { return; }
+    busy[name + "/sending"] = true;
+    const w = widgets[name];
+    while (name in queued) {
+      const body = {};
+      body[name] = queued[name];
+      delete queued[name];
+      try {
+        const response = await fetch("/camera/controls", {
+          method: "POST", cache: "no-store", body: JSON.stringify(body),
+          headers: { "Content-Type": "application/json" } });
+        const answer = await response.json();
+        const result = response.ok ? answer.results[name] : { applied: false,
+                                                               reason: answer.error };
+        if (w) { w.note.textContent = result.applied ? "" : "refused: " + result.reason; }
+      } catch (e) {
+        if (w) { w.note.textContent = "not sent: the viewer does not answer"; }
+      }
+    }
+    busy[name + "/sending"] = false;
+  }
+
+  async function pollCamera() {
+    try {
+      const response = await fetch("/camera", { cache: "no-store" });
+      if (response.status === 404) {  // no camera panel (yet): ask again now and then
+        panel.hidden = true;
+        setTimeout(pollCamera, 5000);
+        return;
+      }
+      if (response.ok) { renderCamera(await response.json()); }
+    } catch (e) {
+      // the node stopped: the status line says so; keep trying
+    }
+    setTimeout(pollCamera, 1000);
+  }
+  pollCamera();
+
+  document.getElementById("snapshot").addEventListener("click", function () {
+    const link = document.createElement("a");
+    link.href = "/snapshot.jpg";
+    link.download = "snapshot-" + new Date().toISOString().replace(/[:.]/g, "-") + ".jpg";
+    document.body.appendChild(link);
+    link.click();
+    link.remove();
+  });
 })();
 </script>
 </body>

@@ -135,3 +135,42 @@ def test_browser_shows_the_live_video_and_stats(launch, browser):
     wait_until(lambda: page.locator('#status').inner_text() == 'disconnected', 10.0,
                interval=0.2, what='the page to notice that the node stopped')
     publisher.stop()
+
+
+def test_moving_a_camera_control_in_the_panel_changes_the_stream(launch, peer, browser):
+    from param_client import get_parameters
+    launch('usbcam_publisher', params={'video_device': 'synthetic', 'framerate': 15.0})
+    # As on a headless board: on every interface, so the viewer wants its token.
+    subscriber = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0,
+                                                     'web_host': '0.0.0.0'})
+    port, token = subscriber.wait_for_output(
+        r'viewer at http://[^\s/]+:(\d+)/\?token=([\w.~-]+)').groups()
+    clean = 'http://127.0.0.1:%s/' % port
+
+    page = browser.new_page()
+    assert page.goto(clean).status == 401
+    page.goto(clean + '?token=' + token)
+    assert page.url == clean, 'the token stays in the address bar'
+    slider = page.locator('#input-brightness')
+    slider.wait_for(state='visible', timeout=30000)
+    wait_until(lambda: page.locator('#video').evaluate('e => e.naturalWidth') > 0, 20.0,
+               interval=0.1, what='the first frame in the browser')
+    assert page.locator('#cam-node').inner_text() == '/usbcam_publisher'
+    assert page.locator('#cam-device').inner_text() == 'synthetic'
+    before = shown_frame(page).mean()
+
+    # A real click on the slider, 60% along: the value there is the slider's own (its range
+    # is the one the publisher's descriptor gives).
+    low, high = (float(slider.get_attribute(name)) for name in ('min', 'max'))
+    box = slider.bounding_box()
+    page.mouse.click(box['x'] + box['width'] * 0.6, box['y'] + box['height'] / 2)
+    value = int(slider.input_value())
+    assert value > (low + high) / 2
+    wait_until(lambda: get_parameters(peer, 'usbcam_publisher', ['brightness'])[0]
+               .integer_value == value, 10, interval=0.1,
+               what='brightness %d on the publisher' % value)
+    assert page.locator('#control-brightness .note').inner_text() == ''
+    # The synthetic camera adds brightness to the luma: the picture gets brighter.
+    wait_until(lambda: shown_frame(page).mean() > before + 0.5 * value, 10, interval=0.2,
+               what='the shown frame to get brighter (mean was %.1f)' % before)
+    assert page.locator('#control-brightness .value').inner_text() == str(value)

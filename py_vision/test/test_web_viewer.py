@@ -27,7 +27,7 @@ import struct
 import cv2
 import numpy as np
 from py_vision.synthetic_camera import read_frame_index, synthetic_frame
-from py_vision.web_viewer import WebViewer, WebViewerError
+from py_vision.web_viewer import CameraError, is_loopback, WebViewer, WebViewerError
 import pytest
 from ros_harness import wait_until
 
@@ -233,7 +233,10 @@ def test_head_and_unsupported_methods(make_viewer):
     viewer = make_viewer()
     status, headers, body = request(viewer, '/stats', 'HEAD')
     assert status == 200 and body == b'' and int(headers['content-length']) > 0
-    status, _, body = request(viewer, '/stats', 'POST')
+    status, headers, body = request(viewer, '/stats', 'POST')
+    assert status == 405 and headers['allow'] == 'GET, HEAD'
+    assert b'clients' not in body
+    status, _, body = request(viewer, '/stats', 'PUT')
     assert status == 501
     assert b'clients' not in body
 
@@ -419,3 +422,82 @@ def test_submit_refuses_what_it_cannot_show(make_viewer, image):
     viewer = make_viewer()
     with pytest.raises(ValueError, match='uint8|numpy'):
         viewer.submit(image)
+
+
+@pytest.mark.parametrize('host, loopback', [
+    ('127.0.0.1', True), ('127.8.9.10', True), ('::1', True), ('[::1]', True),
+    ('localhost', True), ('LOCALHOST', True), ('0.0.0.0', False), ('::', False),
+    ('', False), ('192.168.1.20', False), ('board.local', False), ('10.0.0.1', False)])
+def test_loopback_is_judged_by_the_bound_address(host, loopback):
+    assert is_loopback(host) is loopback
+    assert (WebViewer(host, 0).token is None) is loopback
+
+
+class FakeCamera:
+    """A CameraAccess that answers from a dict (the ROS side is test_camera_panel.py's)."""
+
+    def __init__(self, fail=None):
+        self.received = []
+        self.fail = fail
+
+    def describe(self):
+        return {'publisher': '/cam', 'controls': {'gain': {'value': 3}}}
+
+    def set_controls(self, values):
+        self.received.append(values)
+        if self.fail:
+            raise self.fail
+        return {name: {'applied': True, 'reason': ''} for name in values}
+
+
+def post_json(viewer, body, headers=''):
+    with connect(viewer) as sock:
+        sock.sendall(b'POST /camera/controls HTTP/1.1\r\nHost: localhost\r\n'
+                     b'Content-Type: application/json\r\nContent-Length: %d\r\n%s\r\n%s' % (
+                         len(body), headers.encode(), body))
+        data = b''.join(iter(lambda: sock.recv(65536), b''))
+    status, _, answer = parse_head(data)
+    return status, json.loads(answer)
+
+
+def test_camera_routes_serve_the_camera_given_and_404_without(make_viewer):
+    viewer = make_viewer()
+    status, headers, body = request(viewer, '/camera')
+    assert status == 404 and 'no camera panel' in json.loads(body)['error']
+    assert post_json(viewer, b'{"gain": 1}')[0] == 404
+
+    camera = FakeCamera()
+    viewer.set_stats({'width': 640, 'height': 480, 'fps': 9.5, 'topic': '/t'})
+    viewer.set_camera(camera)
+    status, headers, body = request(viewer, '/camera')
+    assert status == 200 and headers['content-type'] == 'application/json'
+    state = json.loads(body)
+    assert state['controls'] == {'gain': {'value': 3}}
+    assert state['shown'] == {'size': '640x480', 'fps': 9.5, 'topic': '/t'}
+    assert post_json(viewer, b'{"gain": 1}') == (200, {'results': {
+        'gain': {'applied': True, 'reason': ''}}})
+    assert camera.received == [{'gain': 1}]
+    # Nothing reaches the camera from a page of another origin.
+    assert post_json(viewer, b'{"gain": 2}', 'Origin: http://evil.example\r\n')[0] == 403
+    assert post_json(viewer, b'{"gain": 2}', 'Origin: http://localhost\r\n')[0] == 200
+    assert camera.received == [{'gain': 1}, {'gain': 2}]
+    assert request(viewer, '/')[1]['x-frame-options'] == 'DENY'
+
+
+def test_a_failing_camera_side_is_a_500_and_the_viewer_keeps_serving(make_viewer):
+    viewer = make_viewer()
+    viewer.set_camera(FakeCamera(fail=KeyError('boom')))
+    status, answer = post_json(viewer, b'{"gain": 1}')
+    assert status == 500 and 'KeyError' in answer['error']
+    viewer.set_camera(FakeCamera(fail=CameraError(504, '/cam did not answer within 3 s')))
+    assert post_json(viewer, b'{"gain": 1}') == (504, {'error': '/cam did not answer within 3 s'})
+    assert request(viewer, '/stats')[0] == 200
+
+
+def test_a_token_given_is_required_on_loopback_too(make_viewer):
+    viewer = make_viewer(token='a-token-of-16-chars')
+    assert viewer.url.endswith('/?token=a-token-of-16-chars')
+    assert request(viewer, '/stats')[0] == 401
+    status, headers, _ = request(viewer, '/?token=a-token-of-16-chars')
+    assert status == 303 and headers['location'] == '/'
+    assert headers['set-cookie'].startswith('py_vision_token_%d=' % viewer.port)

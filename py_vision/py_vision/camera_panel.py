@@ -1,0 +1,563 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The camera panel's ROS side: the controls of the node that publishes the topic a viewer shows.
+
+`CameraPanel` finds the publisher of the shown topic in the ROS graph, reads its parameters
+through the standard parameter services (list, describe, get) and keeps them current from
+/parameter_events (a change made with `ros2 param set` shows at once) and a periodic re-read.
+A camera control is a parameter whose descriptor's additional_constraints starts with
+`CONTROL_MARK`; its range, step, menu and read-only flag come from that descriptor, so the
+panel shows what the camera reports. What the camera is (device, pixel format, measured rate)
+comes from the publisher's parameters and, when it publishes them, its /diagnostics.
+
+Every ROS call is made on the executor's thread and answered there (async clients, nothing
+waits): the HTTP threads hand their requests over through a guard condition and wait for the
+answer with a bounded timeout. It implements web_viewer.CameraAccess.
+"""
+
+import collections
+import concurrent.futures
+from dataclasses import dataclass
+import math
+import re
+import threading
+import time
+from typing import Any, Dict, List, Optional, Tuple
+
+from py_vision.web_viewer import CameraError
+from rcl_interfaces.msg import (
+    Parameter as ParameterMsg, ParameterEvent, ParameterType, ParameterValue)
+from rcl_interfaces.srv import (
+    DescribeParameters, GetParameters, ListParameters, SetParameters)
+from rclpy.qos import qos_profile_parameter_events
+
+try:
+    from diagnostic_msgs.msg import DiagnosticArray
+except ImportError:  # a system without diagnostic_msgs: the panel shows what it knows without
+    DiagnosticArray = None
+
+# The contract with the camera's node: additional_constraints starting with these words mark a
+# camera control (docs/panel.md, "Which parameters are controls").
+CONTROL_MARK = 'camera control'
+CALL_TIMEOUT_S = 3.0
+REFRESH_PERIOD_S = 1.0
+RELOAD_PERIOD_S = 5.0
+DIAGNOSTICS_STALE_S = 5.0
+# The publisher's parameters that say what the camera is.
+INFO_PARAMETERS = ('video_device', 'pixel_format', 'framerate', 'image_width', 'image_height')
+# Live parameters of the publisher that are not camera controls but change what is shown.
+STREAM_SETTINGS = ('jpeg_quality',)
+# What a processing node subscribes to that leads to the camera upstream.
+IMAGE_TYPES = frozenset(('sensor_msgs/msg/Image', 'sensor_msgs/msg/CompressedImage'))
+
+_TYPE_NAMES = {ParameterType.PARAMETER_BOOL: 'bool', ParameterType.PARAMETER_INTEGER: 'integer',
+               ParameterType.PARAMETER_DOUBLE: 'double', ParameterType.PARAMETER_STRING: 'string'}
+_TYPE_OF_NAME = {name: kind for kind, name in _TYPE_NAMES.items()}
+_MENU_MARK = 'menu: '
+_LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
+_STATUS = ' status'  # the diagnostics' level and message, under a key no value can have
+_ALIAS = re.compile(r'\bname for ([A-Za-z0-9_]+)')
+_INACTIVE = re.compile(r'\binactive (while [^;]*)')
+
+
+def python_value(value: ParameterValue) -> Any:
+    """Return a ParameterValue as a JSON-able Python value (None when not set)."""
+    kind = value.type
+    if kind == ParameterType.PARAMETER_BOOL:
+        return value.bool_value
+    if kind == ParameterType.PARAMETER_INTEGER:
+        return value.integer_value
+    if kind == ParameterType.PARAMETER_DOUBLE:
+        return value.double_value
+    if kind == ParameterType.PARAMETER_STRING:
+        return value.string_value
+    if kind == ParameterType.PARAMETER_NOT_SET:
+        return None
+    return '(a parameter of type %d)' % kind
+
+
+def parse_menu(description: str) -> Optional[List[Dict[str, Any]]]:
+    """Return the entries of 'menu: 1=Manual; 3=Auto' in a description, or None."""
+    at = description.find(_MENU_MARK)
+    if at < 0:
+        return None
+    entries = []
+    for item in description[at + len(_MENU_MARK):].split('; '):
+        value, equals, label = item.partition('=')
+        try:
+            number = int(value.strip())
+        except ValueError:
+            break
+        if not equals:
+            break
+        entries.append({'value': number, 'label': label.strip()})
+    return entries or None
+
+
+@dataclass
+class Control:
+    """One control as the panel shows it and GET /camera describes it."""
+
+    name: str
+    type: Optional[str]  # noqa: A003 'bool', 'integer', 'double', 'string'; None: not known
+    value: Any                     # None: not set (the camera's own value)
+    read_only: bool
+    group: str                     # 'camera' (a camera control) or 'stream'
+    description: str = ''
+    min: Optional[float] = None    # noqa: A003 (the JSON field's name)
+    max: Optional[float] = None    # noqa: A003
+    step: Optional[float] = None
+    menu: Optional[List[Dict[str, Any]]] = None
+    alias_of: Optional[str] = None  # another name of that control (usb_cam's names)
+    inactive: Optional[str] = None  # why the camera ignores it now ('while ...')
+
+    @classmethod
+    def from_descriptor(cls, descriptor, value: ParameterValue) -> Optional['Control']:
+        """Return the Control a descriptor describes, or None when it is neither kind."""
+        constraints = descriptor.additional_constraints
+        if constraints.startswith(CONTROL_MARK):
+            group = 'camera'
+        elif descriptor.name in STREAM_SETTINGS:
+            group = 'stream'
+        else:
+            return None
+        kind = _TYPE_NAMES.get(descriptor.type) or _TYPE_NAMES.get(value.type)
+        if kind is None:
+            # Not set and dynamically typed: the control's type is named after the mark.
+            words = constraints[len(CONTROL_MARK):].split(';')[0].replace(',', ' ')
+            kind = next((word for word in words.split() if word in _TYPE_OF_NAME), None)
+        control = cls(descriptor.name, kind, python_value(value), bool(descriptor.read_only),
+                      group, descriptor.description, menu=parse_menu(descriptor.description))
+        if group == 'camera':
+            # Optional words after the mark: 'name for <control>' (an alias), 'inactive while'.
+            alias = _ALIAS.search(constraints)
+            inactive = _INACTIVE.search(constraints)
+            control.alias_of = alias.group(1) if alias else None
+            control.inactive = inactive.group(1).strip() if inactive else None
+        if descriptor.integer_range:
+            bounds = descriptor.integer_range[0]
+            control.min, control.max = bounds.from_value, bounds.to_value
+            control.step = bounds.step or 1
+            control.type = control.type or 'integer'
+        elif descriptor.floating_point_range:
+            bounds = descriptor.floating_point_range[0]
+            control.min, control.max = bounds.from_value, bounds.to_value
+            control.step = bounds.step
+            control.type = control.type or 'double'
+        return control
+
+    def to_json(self) -> Dict[str, Any]:
+        """Return the control as GET /camera shows it."""
+        return {'type': self.type, 'value': self.value, 'min': self.min, 'max': self.max,
+                'step': self.step, 'menu': self.menu, 'read_only': self.read_only,
+                'live': not self.read_only, 'group': self.group,
+                'description': self.description, 'alias_of': self.alias_of,
+                'inactive': self.inactive}
+
+    def request_value(self, value: Any) -> ParameterValue:
+        """Return value as this control's ParameterValue; raise CameraError(400) if mistyped."""
+        kind = self.type
+        if kind is None:  # unknown until set: the JSON type says what is meant
+            kind = {bool: 'bool', int: 'integer', float: 'double', str: 'string'}.get(
+                type(value))
+        good = False
+        if kind == 'bool':
+            good = isinstance(value, bool)
+        elif kind == 'integer':
+            if isinstance(value, float) and math.isfinite(value) and value.is_integer():
+                value = int(value)
+            good = (isinstance(value, int) and not isinstance(value, bool) and
+                    -2 ** 63 <= value < 2 ** 63)
+        elif kind == 'double':
+            good = (isinstance(value, (int, float)) and not isinstance(value, bool) and
+                    math.isfinite(value))
+            value = float(value) if good else value
+        elif kind == 'string':
+            good = isinstance(value, str)
+        if not good:
+            raise CameraError(400, 'control %s takes %s, got %s' % (
+                self.name, {'bool': 'true or false', 'integer': 'an integer',
+                            'double': 'a number', 'string': 'a string'}.get(kind, 'a value'),
+                _json_text(value)))
+        result = ParameterValue(type=_TYPE_OF_NAME[kind])
+        setattr(result, {'bool': 'bool_value', 'integer': 'integer_value',
+                         'double': 'double_value', 'string': 'string_value'}[kind], value)
+        return result
+
+
+def _json_text(value):
+    text = repr(value) if not isinstance(value, (dict, list)) else type(value).__name__
+    return text if len(text) <= 40 else text[:37] + '...'
+
+
+class _Calls:
+    """The parameter service clients of one node, and the calls on their way."""
+
+    SERVICES = (('list', ListParameters, 'list_parameters'),
+                ('describe', DescribeParameters, 'describe_parameters'),
+                ('get', GetParameters, 'get_parameters'),
+                ('set', SetParameters, 'set_parameters'))
+
+    def __init__(self, node, target: str, timeout: float):
+        self._node = node
+        self._timeout = timeout
+        self.clients = {key: node.create_client(kind, '%s/%s' % (target.rstrip('/'), name))
+                        for key, kind, name in self.SERVICES}
+        self._pending: List[Tuple[float, Any, Any, Any]] = []
+
+    def ready(self, key: str) -> bool:
+        return self.clients[key].service_is_ready()
+
+    def call(self, key: str, request, on_reply, on_timeout):
+        """Send request; on_reply(response) or on_timeout() follows on the executor thread."""
+        client = self.clients[key]
+        future = client.call_async(request)
+        entry = (time.monotonic() + self._timeout, client, future, on_timeout)
+        self._pending.append(entry)
+
+        def done(finished):
+            if entry in self._pending:
+                self._pending.remove(entry)
+                on_reply(finished.result())
+        future.add_done_callback(done)
+
+    def expire(self):
+        """Give up the calls that have had no answer within the timeout."""
+        now = time.monotonic()
+        for entry in [e for e in self._pending if e[0] < now]:
+            self._pending.remove(entry)
+            entry[1].remove_pending_request(entry[2])
+            entry[3]()
+
+    def destroy(self):
+        for client in self.clients.values():
+            self._node.destroy_client(client)
+        self._pending.clear()
+
+
+class CameraPanel:
+    """The camera of the node publishing `topic`: its controls, read and set over ROS."""
+
+    def __init__(self, node, topic: str, *, call_timeout: float = CALL_TIMEOUT_S,
+                 refresh_period: float = REFRESH_PERIOD_S,
+                 reload_period: float = RELOAD_PERIOD_S, clock=time.monotonic):
+        self._node = node
+        self._topic = topic
+        self._own_name = self._full_name(node.get_namespace(), node.get_name())
+        self._timeout = call_timeout
+        self._reload_period = reload_period
+        self._clock = clock
+        self._lock = threading.Lock()  # guards what the HTTP threads read: the state below
+        self._publisher: Optional[str] = None
+        self._publishers: List[str] = []
+        self._controls: Dict[str, Control] = {}
+        self._info: Dict[str, Any] = {}
+        self._loaded = False
+        self._problem = ''
+        self._diagnostics: Optional[Tuple[float, Dict[str, str]]] = None
+        # Only the executor thread uses these.
+        self._calls: Optional[_Calls] = None
+        self._generation = 0
+        self._loading = False
+        self._last_load = -math.inf
+        self._without_controls = set()  # publishers known to have no camera controls
+        self._via: List[str] = []
+        self._jobs = collections.deque()
+        self._wake = node.create_guard_condition(self._run_jobs)
+        node.create_subscription(ParameterEvent, '/parameter_events', self._on_event,
+                                 qos_profile_parameter_events)
+        if DiagnosticArray is not None:
+            node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 10)
+        node.create_timer(refresh_period, self._refresh)
+
+    @staticmethod
+    def _full_name(namespace, name):
+        return namespace.rstrip('/') + '/' + name
+
+    # --- what the HTTP threads call --------------------------------------------------
+
+    def describe(self) -> Dict[str, Any]:
+        """Return what the camera is and its controls (GET /camera)."""
+        with self._lock:
+            publisher, publishers, via = self._publisher, list(self._publishers), self._via
+            controls = {name: c.to_json() for name, c in self._controls.items()}
+            info, loaded, problem = dict(self._info), self._loaded, self._problem
+            diagnostics = self._diagnostics
+        if diagnostics is not None and self._clock() - diagnostics[0] > DIAGNOSTICS_STALE_S:
+            diagnostics = None
+        values = diagnostics[1] if diagnostics else {}
+        if publisher is None:
+            message = 'no node publishes %s: start the camera (ros2 run py_vision ' \
+                      'usbcam_publisher) or check the topic' % self._topic
+        elif problem:
+            message = problem
+        elif not loaded:
+            message = 'reading the controls of %s' % publisher
+        elif not any(c['group'] == 'camera' for c in controls.values()):
+            message = '%s has no camera controls' % publisher
+        else:
+            message = ''
+        if via:
+            message = ('the frames come through %s: this is the camera of %s. %s' % (
+                ' and '.join(via), publisher, message)).strip()
+        if len(publishers) > 1 and publisher is not None:
+            message = ('%d nodes publish %s (%s): this is %s. %s' % (
+                len(publishers), self._topic, ', '.join(publishers), publishers[0],
+                message)).strip()
+        pixel_format = values.get('pixel format')
+        if pixel_format is None and info.get('pixel_format') not in (None, 'auto'):
+            pixel_format = '%s (requested)' % info['pixel_format']
+        camera = {
+            'device': info.get('video_device') or values.get('device'),
+            'pixel_format': pixel_format,
+            'size': values.get('size'),
+            'fps': _number(values.get('frame rate')),
+            'requested_fps': _number(values.get('requested rate', info.get('framerate'))),
+            'status': values.get(_STATUS),
+            'diagnostics': diagnostics is not None,
+        }
+        return {'topic': self._topic, 'publisher': publisher, 'via': via,
+                'publishers': publishers, 'message': message, 'camera': camera,
+                'controls': controls}
+
+    def set_controls(self, values: Dict[str, Any]) -> Dict[str, Any]:
+        """Set name: value on the publisher; return name: {applied, reason} (POST)."""
+        with self._lock:
+            publisher, loaded = self._publisher, self._loaded
+            controls = dict(self._controls)
+        if publisher is None:
+            raise CameraError(503, 'no node publishes %s' % self._topic)
+        if not loaded:
+            raise CameraError(503, 'still reading the controls of %s; try again' % publisher)
+        unknown = sorted(name for name in values if name not in controls)
+        if unknown:
+            raise CameraError(400, 'unknown control%s %s; %s has: %s' % (
+                's' if len(unknown) > 1 else '', ', '.join(map(_json_text, unknown)),
+                publisher, ', '.join(controls) or 'none'))
+        names = list(values)
+        parameters = [ParameterMsg(name=name, value=controls[name].request_value(values[name]))
+                      for name in names]
+        answer = concurrent.futures.Future()
+        self._submit(lambda: self._send_set(publisher, parameters, answer))
+        try:
+            results = answer.result(timeout=self._timeout + 1.0)
+        except concurrent.futures.TimeoutError:
+            raise CameraError(504, '%s did not answer within %g s' % (
+                publisher, self._timeout)) from None
+        reply = {}
+        with self._lock:
+            for name, parameter, result in zip(names, parameters, results):
+                reply[name] = {'applied': bool(result.successful), 'reason': result.reason}
+                if result.successful and self._publisher == publisher and (
+                        name in self._controls):
+                    self._controls[name].value = python_value(parameter.value)
+        return reply
+
+    def _submit(self, job):
+        self._jobs.append(job)
+        self._wake.trigger()
+
+    # --- the executor thread ---------------------------------------------------------
+
+    def _run_jobs(self):
+        while self._jobs:
+            self._jobs.popleft()()
+
+    def _send_set(self, publisher, parameters, answer):
+        calls = self._calls
+        if calls is None or self._publisher != publisher:
+            answer.set_exception(CameraError(503, '%s is gone' % publisher))
+        elif not calls.ready('set'):
+            answer.set_exception(CameraError(503, '%s does not offer its parameter services '
+                                             'now' % publisher))
+        else:
+            calls.call('set', SetParameters.Request(parameters=parameters),
+                       lambda response: answer.set_result(response.results),
+                       lambda: answer.set_exception(CameraError(504, '%s did not answer within '
+                                                                '%g s' % (publisher,
+                                                                          self._timeout))))
+
+    def _publishers_of(self, topic, *others):
+        """Return the nodes publishing topic (a graph name), but this one and others."""
+        if topic == self._topic:
+            infos = self._node.get_publishers_info_by_topic(topic)
+            names = {self._full_name(i.node_namespace, i.node_name) for i in infos}
+        else:
+            # get_publishers_info_by_topic() applies this node's remappings to the name it is
+            # given (the subscriber's usb_camera/image:=cv_bridge_image would turn the name
+            # up the pipeline back into the shown one): ask each node what it publishes.
+            names = set()
+            for name, namespace in self._node.get_node_names_and_namespaces():
+                try:
+                    topics = self._node.get_publisher_names_and_types_by_node(name, namespace)
+                except Exception:  # the node left the graph meanwhile
+                    continue
+                if any(published == topic for published, _ in topics):
+                    names.add(self._full_name(namespace, name))
+        return sorted(names - {self._own_name, *others})
+
+    def _upstream(self, publisher):
+        """Return the node publishing the images that publisher processes (or None)."""
+        namespace, _, name = publisher.rpartition('/')
+        try:
+            topics = self._node.get_subscriber_names_and_types_by_node(name, namespace or '/')
+        except Exception:  # the node left the graph between two calls
+            return None
+        for topic, types in sorted(topics):
+            if IMAGE_TYPES.intersection(types):
+                publishers = self._publishers_of(topic, publisher)
+                if publishers:
+                    return publishers[0]
+        return None
+
+    def _refresh(self):
+        """Follow the graph: which node's camera it is; re-read its parameters at times."""
+        publishers = self._publishers_of(self._topic)
+        publisher = publishers[0] if publishers else None
+        # A processing node (cv_bridge_test) has no camera: the panel shows the camera of the
+        # images it processes, up the pipeline.
+        via, seen = [], set()
+        while publisher in self._without_controls and publisher not in seen:
+            seen.add(publisher)
+            upstream = self._upstream(publisher)
+            if upstream is None:
+                break
+            via.append(publisher)
+            publisher = upstream
+        with self._lock:
+            self._via = via
+        if publisher != self._publisher:
+            if self._calls is not None:
+                self._calls.destroy()
+            self._calls = (_Calls(self._node, publisher, self._timeout)
+                           if publisher is not None else None)
+            self._generation += 1
+            self._loading = False
+            self._last_load = -math.inf
+            with self._lock:
+                self._publisher = publisher
+                self._controls, self._info, self._loaded, self._problem = {}, {}, False, ''
+                self._diagnostics = None
+        with self._lock:
+            self._publishers = publishers
+        if self._calls is None:
+            return
+        self._calls.expire()
+        if not self._loading and self._clock() - self._last_load >= self._reload_period:
+            self._load()
+
+    def _load(self):
+        """Read every parameter's name, then descriptors and values: list, describe, get."""
+        calls, generation = self._calls, self._generation
+        if not all(calls.ready(key) for key in ('list', 'describe', 'get')):
+            return  # its services are not discovered yet: the next refresh tries again
+        self._loading = True
+        self._last_load = self._clock()
+
+        def current():
+            return generation == self._generation
+
+        def failed():
+            if current():
+                self._loading = False
+                with self._lock:
+                    self._problem = '%s did not answer within %g s' % (
+                        self._publisher, self._timeout)
+
+        def listed(response):
+            if current():
+                names = list(response.result.names)
+                calls.call('describe', DescribeParameters.Request(names=names),
+                           described, failed)
+
+        def described(response):
+            if not current():
+                return
+            wanted = [d for d in response.descriptors if d.name in INFO_PARAMETERS or
+                      d.additional_constraints.startswith(CONTROL_MARK) or
+                      d.name in STREAM_SETTINGS]
+            calls.call('get', GetParameters.Request(names=[d.name for d in wanted]),
+                       lambda reply: got(wanted, reply), failed)
+
+        def got(descriptors, response):
+            if not current():
+                return
+            controls, info = {}, {}
+            for descriptor, value in zip(descriptors, response.values):
+                control = Control.from_descriptor(descriptor, value)
+                if control is not None:
+                    controls[descriptor.name] = control
+                if descriptor.name in INFO_PARAMETERS:
+                    info[descriptor.name] = python_value(value)
+            # Camera controls first, then the stream settings, each in the node's order.
+            ordered = dict(sorted(controls.items(), key=lambda item: item[1].group != 'camera'))
+            self._loading = False
+            if not any(c.group == 'camera' for c in controls.values()):
+                self._without_controls.add(self._publisher)
+                self._last_load = -math.inf  # look up the pipeline at the next refresh
+            with self._lock:
+                self._controls, self._info = ordered, info
+                self._loaded, self._problem = True, ''
+
+        calls.call('list', ListParameters.Request(), listed, failed)
+
+    def _on_event(self, event):
+        """Apply a parameter change of the publisher (made here or anywhere else)."""
+        if event.node != self._publisher:
+            return
+        reload = False
+        with self._lock:
+            for parameter in list(event.new_parameters) + list(event.changed_parameters):
+                control = self._controls.get(parameter.name)
+                if control is not None:
+                    control.value = python_value(parameter.value)
+                    if control.type is None:
+                        control.type = _TYPE_NAMES.get(parameter.value.type)
+                elif parameter.name in INFO_PARAMETERS:
+                    self._info[parameter.name] = python_value(parameter.value)
+                else:
+                    reload = True  # a new parameter: it may be a control (a new camera)
+            # Any change may change what else is active (automatic exposure on: the exposure
+            # time is inactive), which only the descriptors say: re-read them at the next tick.
+            reload = reload or bool(event.changed_parameters) or bool(event.deleted_parameters)
+        if reload:
+            self._last_load = -math.inf
+
+    def _on_diagnostics(self, message):
+        if self._publisher is None:
+            return
+        names = (self._publisher, self._publisher.lstrip('/'), self._publisher.split('/')[-1])
+        for status in message.status:
+            owner = status.name.split(':', 1)[0].strip()
+            if owner in names and any(item.key == 'pixel format' for item in status.values):
+                values = {item.key: item.value for item in status.values}
+                values.setdefault('device', status.hardware_id)
+                level = status.level[0] if isinstance(status.level, bytes) else status.level
+                values[_STATUS] = '%s: %s' % (_LEVELS.get(level, level), status.message)
+                with self._lock:
+                    self._diagnostics = (self._clock(), values)
+
+
+def _number(text):
+    """Return a number given as a string or number ('15.0 fps' -> 15.0), or None."""
+    if isinstance(text, (int, float)) and not isinstance(text, bool):
+        return float(text)
+    if not isinstance(text, str):
+        return None
+    try:
+        return float(text.split()[0])
+    except (ValueError, IndexError):
+        return None

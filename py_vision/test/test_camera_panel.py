@@ -1,0 +1,408 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The camera panel's API end to end: a real usbcam_publisher and the viewer of a subscriber.
+
+What GET /camera shows is checked against what the publisher itself says through its
+parameter services (the expected ranges come from its descriptors, never from this file), and
+what POST /camera/controls does is checked there too.
+"""
+
+import http.client
+import json
+import re
+
+from param_client import describe_parameters, get_parameters, set_parameter
+from rcl_interfaces.srv import ListParameters
+from ros_harness import wait_until
+
+URL_LINE = r'viewer at http://[^\s/]+:(\d+)/(\?token=([\w.~-]+))?'
+CONTROL_MARK = 'camera control'
+PUBLISHER = 'usbcam_publisher'
+
+
+def call(port, method, path, body=None, headers=None, timeout=10.0):
+    """Send one request to 127.0.0.1:port; return (status, headers, body as JSON or bytes)."""
+    connection = http.client.HTTPConnection('127.0.0.1', port, timeout=timeout)
+    try:
+        connection.request(method, path, body=body, headers=headers or {})
+        response = connection.getresponse()
+        data = response.read()
+        answer = data
+        if response.getheader('Content-Type', '').startswith('application/json'):
+            answer = json.loads(data)
+        return response.status, {k.lower(): v for k, v in response.getheaders()}, answer
+    finally:
+        connection.close()
+
+
+def post(port, values, headers=None):
+    body = values if isinstance(values, bytes) else json.dumps(values).encode()
+    return call(port, 'POST', '/camera/controls', body,
+                dict({'Content-Type': 'application/json'}, **(headers or {})))
+
+
+def camera(port):
+    status, _, state = call(port, 'GET', '/camera')
+    assert status == 200, state
+    return state
+
+
+def start_viewer(launch, **params):
+    subscriber = launch('usbcam_subscriber', params=dict(
+        {'display': 'web', 'web_port': 0}, **params))
+    match = subscriber.wait_for_output(URL_LINE)
+    return subscriber, int(match.group(1)), match.group(3)
+
+
+def camera_controls(peer):
+    """Return name: descriptor of the publisher's camera controls, as it describes them."""
+    from param_client import _call
+    names = _call(peer, PUBLISHER, ListParameters, 'list_parameters',
+                  ListParameters.Request()).result.names
+    return {d.name: d for d in describe_parameters(peer, PUBLISHER, names)
+            if d.additional_constraints.startswith(CONTROL_MARK)}
+
+
+def value_of(parameter_value):
+    return {1: parameter_value.bool_value, 2: parameter_value.integer_value,
+            3: parameter_value.double_value, 4: parameter_value.string_value}.get(
+                parameter_value.type)
+
+
+def test_the_api_shows_and_sets_the_publishers_controls(launch, peer):
+    launch('usbcam_publisher', params={'video_device': 'synthetic', 'framerate': 15.0})
+    subscriber, port, token = start_viewer(launch)
+    assert token is None, 'a loopback viewer needs no token'
+
+    state = wait_until(lambda: (lambda s: s if s['controls'] else None)(camera(port)), 30,
+                       interval=0.2, what='the controls in GET /camera')
+    assert state['publisher'] == '/' + PUBLISHER
+    assert state['topic'] == '/usb_camera/image'
+    assert state['camera']['device'] == 'synthetic'
+    wait_until(lambda: camera(port)['shown'].get('size') == '640x480', 15, interval=0.2,
+               what='the size of the frames shown')
+
+    # Every camera control the publisher describes, with its range, and nothing else of it
+    # but the stream settings.
+    descriptors = camera_controls(peer)
+    assert descriptors, 'the publisher marks no parameter as a camera control'
+    shown = state['controls']
+    assert {n for n, c in shown.items() if c['group'] == 'camera'} == set(descriptors)
+    assert shown['jpeg_quality']['group'] == 'stream'
+    for name, descriptor in descriptors.items():
+        control = shown[name]
+        assert control['read_only'] == descriptor.read_only, name
+        if descriptor.integer_range:
+            bounds = descriptor.integer_range[0]
+            assert (control['min'], control['max'], control['step']) == (
+                bounds.from_value, bounds.to_value, bounds.step or 1), name
+            assert control['type'] == 'integer', name
+    values = get_parameters(peer, PUBLISHER, list(descriptors))
+    assert {n: shown[n]['value'] for n in descriptors} == {
+        n: value_of(v) for n, v in zip(descriptors, values)}
+
+    # A change in the panel is the publisher's parameter.
+    bounds = descriptors['brightness'].integer_range[0]
+    step = bounds.step or 1
+    target = (bounds.from_value + bounds.to_value) // 2 + 10 * step
+    status, _, answer = post(port, {'brightness': target})
+    assert status == 200, answer
+    assert answer['results']['brightness'] == {'applied': True, 'reason': ''}
+    assert value_of(get_parameters(peer, PUBLISHER, ['brightness'])[0]) == target
+    assert camera(port)['controls']['brightness']['value'] == target
+
+    # A value the node refuses: the answer is the node's own reason, and nothing changed.
+    too_high = bounds.to_value + step
+    status, _, answer = post(port, {'brightness': too_high})
+    assert status == 200, answer
+    result = answer['results']['brightness']
+    assert result['applied'] is False
+    assert result['reason'] == set_parameter(peer, PUBLISHER, 'brightness', too_high).reason
+    assert result['reason']
+    assert value_of(get_parameters(peer, PUBLISHER, ['brightness'])[0]) == target
+
+    # A change made elsewhere (ros2 param set) shows up.
+    contrast = descriptors['contrast'].integer_range[0]
+    wanted = contrast.from_value + (contrast.step or 1)
+    assert set_parameter(peer, PUBLISHER, 'contrast', wanted).successful
+    wait_until(lambda: camera(port)['controls']['contrast']['value'] == wanted, 10,
+               interval=0.1, what='the contrast set elsewhere in GET /camera')
+
+    # Several at once: each has its own answer.
+    status, _, answer = post(port, {'brightness': target - step, 'contrast': too_high * 1000})
+    assert status == 200
+    assert answer['results']['brightness']['applied'] is True
+    assert answer['results']['contrast']['applied'] is False
+    assert 'Traceback' not in subscriber.output()
+
+
+def test_bad_requests_are_4xx_with_the_reason_and_the_node_stays_up(launch):
+    launch('usbcam_publisher', params={'video_device': 'synthetic', 'framerate': 15.0})
+    subscriber, port, _ = start_viewer(launch)
+    wait_until(lambda: camera(port)['controls'], 30, interval=0.2, what='the controls')
+
+    cases = [
+        (b'{brightness: 1', 'application/json', 400, 'not JSON'),
+        (b'[1, 2]', 'application/json', 400, 'JSON object'),
+        (b'{}', 'application/json', 400, 'JSON object'),
+        (b'{"no_such_control": 1}', 'application/json', 400, 'unknown control'),
+        (b'{"brightness": "bright"}', 'application/json', 400, 'an integer'),
+        (b'{"brightness": true}', 'application/json', 400, 'an integer'),
+        (b'{"brightness": 1.5}', 'application/json', 400, 'an integer'),
+        (b'{"brightness": 123456789012345678901234567890}', 'application/json', 400,
+         'an integer'),
+        (b'{"brightness": NaN}', 'application/json', 400, 'an integer'),
+        (b'{"brightness": 1}', 'text/plain', 415, 'application/json'),
+        (b'{"brightness": 1}', 'application/x-www-form-urlencoded', 415, 'application/json'),
+        (b'{"x": "%s"}' % (b'a' * 100000), 'application/json', 413, 'at most'),
+        (b'\xff\xfe{}', 'application/json', 400, 'not JSON'),
+    ]
+    for body, content_type, expected, words in cases:
+        status, _, answer = call(port, 'POST', '/camera/controls', body,
+                                 {'Content-Type': content_type})
+        assert status == expected, (body[:40], status, answer)
+        assert words in answer['error'], (body[:40], answer)
+    status, _, answer = call(port, 'POST', '/camera', b'{}',
+                             {'Content-Type': 'application/json'})
+    assert status == 405
+    # A page of another site cannot change anything (its Origin is not the viewer's).
+    status, _, answer = post(port, {'brightness': 1}, {'Origin': 'http://evil.example'})
+    assert status == 403 and 'Origin' in answer['error']
+    # Nor read anything through a name rebound to 127.0.0.1.
+    status, _, answer = call(port, 'GET', '/camera', headers={'Host': 'evil.example:%d' % port})
+    assert status == 403
+    # Still serving, no traceback.
+    assert call(port, 'GET', '/stats')[0] == 200
+    assert post(port, {'brightness': 0})[2]['results']['brightness']['applied'] is True
+    assert subscriber.proc.poll() is None
+    assert 'Traceback' not in subscriber.output()
+
+
+def test_without_a_publisher_the_panel_says_so(launch):
+    subscriber, port, _ = start_viewer(launch)
+    state = camera(port)
+    assert state['publisher'] is None and state['controls'] == {}
+    assert 'no node publishes /usb_camera/image' in state['message']
+    status, _, answer = post(port, {'brightness': 1})
+    assert status == 503 and 'no node publishes' in answer['error']
+
+
+def test_off_loopback_every_request_needs_the_token(launch):
+    # Bound to every interface (reached here through 127.0.0.1): loopback is judged by the
+    # address the viewer is bound to, not by where a request comes from.
+    subscriber, port, token = start_viewer(launch, web_host='0.0.0.0')
+    assert token, 'no token in the logged URL of a viewer on 0.0.0.0'
+    log = subscriber.output()
+    assert log.count(token) == 1, 'the token is written more than once'
+
+    for path in ('/', '/stream', '/snapshot.jpg', '/stats', '/camera'):
+        status, headers, _ = call(port, 'GET', path)
+        assert status == 401, path
+    assert call(port, 'GET', '/stats', headers={'Authorization': 'Bearer wrong'})[0] == 401
+    assert call(port, 'GET', '/?token=wrong')[0] == 401
+    assert post(port, {'brightness': 1})[0] == 401
+
+    # Opening the logged URL sets the cookie and leads to the clean URL.
+    status, headers, _ = call(port, 'GET', '/?token=' + token)
+    assert status == 303 and headers['location'] == '/'
+    cookie = headers['set-cookie']
+    assert 'HttpOnly' in cookie and 'SameSite=Strict' in cookie
+    name_value = cookie.split(';')[0]
+    assert name_value.endswith('=' + token)
+    assert call(port, 'GET', '/', headers={'Cookie': name_value})[0] == 200
+    assert call(port, 'GET', '/camera', headers={'Cookie': name_value})[0] == 200
+    assert call(port, 'GET', '/stats',
+                headers={'Authorization': 'Bearer ' + token})[0] == 200
+
+    # A change with the cookie needs the page's own Origin; a script's header needs none.
+    own = {'Cookie': name_value, 'Origin': 'http://127.0.0.1:%d' % port}
+    assert post(port, {'brightness': 1}, {'Cookie': name_value})[0] == 403
+    assert post(port, {'brightness': 1}, dict(own, Origin='http://evil.example'))[0] == 403
+    assert post(port, {'brightness': 1}, own)[0] == 503  # past the checks: no publisher
+    assert post(port, {'brightness': 1}, {'Authorization': 'Bearer ' + token})[0] == 503
+    assert subscriber.output().count(token) == 1
+    assert 'Traceback' not in subscriber.output()
+
+
+def test_web_token_sets_the_token(launch):
+    chosen = 'a-token-of-my-own-1234'
+    subscriber, port, token = start_viewer(launch, web_host='0.0.0.0', web_token=chosen)
+    assert token == chosen
+    assert call(port, 'GET', '/stats', headers={'Authorization': 'Bearer ' + chosen})[0] == 200
+    bad = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0,
+                                              'web_token': 'short'}, name='bad_token')
+    assert bad.wait_exit(20) == 1
+    assert re.search(r'web_token.*at least 16', bad.output())
+    assert 'Traceback' not in bad.output()
+
+
+# What a control looks like to the panel, from descriptors written as the contract says
+# (no ROS graph: the descriptors are made here).
+
+def ros_value(value):
+    from param_client import parameter_value
+    return parameter_value(value)
+
+
+def descriptor(name, **fields):
+    from rcl_interfaces.msg import ParameterDescriptor
+    return ParameterDescriptor(name=name, **fields)
+
+
+def test_controls_are_read_from_descriptors_as_the_contract_writes_them():
+    from py_vision.camera_panel import Control, parse_menu
+    from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterValue
+
+    exposure = Control.from_descriptor(descriptor(
+        'auto_exposure', type=2, description='Auto Exposure; menu: 1=Manual Mode; '
+        '3=Aperture Priority Mode', additional_constraints='camera control, menu',
+        integer_range=[IntegerRange(from_value=0, to_value=3, step=1)]), ros_value(3))
+    assert exposure.to_json() == {
+        'type': 'integer', 'value': 3, 'min': 0, 'max': 3, 'step': 1, 'read_only': False,
+        'live': True, 'group': 'camera', 'description': exposure.description,
+        'menu': [{'value': 1, 'label': 'Manual Mode'},
+                 {'value': 3, 'label': 'Aperture Priority Mode'}],
+        'alias_of': None, 'inactive': None}
+
+    temperature = Control.from_descriptor(descriptor(
+        'white_balance_temperature', type=2, additional_constraints='camera control',
+        integer_range=[IntegerRange(from_value=2800, to_value=6500, step=10)]),
+        ros_value(4600))
+    assert (temperature.min, temperature.max, temperature.step) == (2800, 6500, 10)
+    assert temperature.menu is None and temperature.inactive is None
+
+    # Optional words after the mark: why a control is inactive, and another name of one.
+    held = Control.from_descriptor(descriptor(
+        'exposure_time_absolute', type=2, additional_constraints='camera control 0x009a0902 '
+        '(int, step 1, default 156); inactive while auto_exposure is 3 (automatic)',
+        integer_range=[IntegerRange(from_value=3, to_value=2047, step=1)]), ros_value(156))
+    assert held.inactive == 'while auto_exposure is 3 (automatic)'
+    alias = Control.from_descriptor(descriptor(
+        'exposure', type=2, additional_constraints='camera control: usb_cam name for '
+        'exposure_time_absolute'), ros_value(156))
+    assert alias.alias_of == 'exposure_time_absolute' and alias.inactive is None
+
+    fixed = Control.from_descriptor(descriptor(
+        'exposure_time_absolute', type=2, read_only=True,
+        additional_constraints='camera control'), ros_value(156))
+    assert fixed.read_only and fixed.to_json()['live'] is False
+
+    switch = Control.from_descriptor(descriptor(
+        'focus_automatic_continuous', type=1, additional_constraints='camera control'),
+        ros_value(True))
+    assert switch.type == 'bool' and switch.value is True and switch.min is None
+
+    # Not set yet (usb_cam's names): dynamically typed, the type named after the mark.
+    unset = Control.from_descriptor(descriptor(
+        'autofocus', dynamic_typing=True, additional_constraints='camera control, bool'),
+        ParameterValue())
+    assert unset.type == 'bool' and unset.value is None
+    gain = Control.from_descriptor(descriptor(
+        'gain', dynamic_typing=True, additional_constraints='camera control, integer',
+        floating_point_range=[]), ParameterValue())
+    assert gain.type == 'integer'
+    zoom = Control.from_descriptor(descriptor(
+        'zoom', type=3, additional_constraints='camera control',
+        floating_point_range=[FloatingPointRange(from_value=1.0, to_value=4.0)]),
+        ros_value(1.0))
+    assert zoom.type == 'double' and (zoom.min, zoom.max) == (1.0, 4.0)
+
+    assert Control.from_descriptor(descriptor(
+        'framerate', type=3, additional_constraints='a number > 0'), ros_value(10.0)) is None
+    assert Control.from_descriptor(descriptor('jpeg_quality', type=2), ros_value(80)).group \
+        == 'stream'
+    assert parse_menu('no menu here') is None
+    assert parse_menu('Power Line Frequency; menu: 0=Disabled; 1=50 Hz; 2=60 Hz') == [
+        {'value': 0, 'label': 'Disabled'}, {'value': 1, 'label': '50 Hz'},
+        {'value': 2, 'label': '60 Hz'}]
+
+
+def test_a_value_of_the_wrong_type_is_refused_before_it_reaches_the_node():
+    from py_vision.camera_panel import Control
+    from py_vision.web_viewer import CameraError
+    from rcl_interfaces.msg import ParameterValue
+    import pytest
+
+    integer = Control('brightness', 'integer', None, False, 'camera')
+    assert integer.request_value(7).integer_value == 7
+    assert integer.request_value(7.0).integer_value == 7  # what JSON from JavaScript may hold
+    switch = Control('autofocus', 'bool', None, False, 'camera')
+    assert switch.request_value(False).type == 1
+    for control, value in ((integer, True), (integer, 1.5), (integer, '7'), (integer, None),
+                           (switch, 1), (switch, 'on'), (integer, float('nan'))):
+        with pytest.raises(CameraError) as refused:
+            control.request_value(value)
+        assert refused.value.status == 400 and control.name in str(refused.value)
+    unknown = Control('x', None, None, False, 'camera')
+    assert unknown.request_value(2).type == 2 and unknown.request_value(True).type == 1
+    assert isinstance(unknown.request_value('a'), ParameterValue)
+
+
+def test_through_a_processing_node_the_panel_shows_the_camera_upstream(launch):
+    launch('usbcam_publisher', params={'video_device': 'synthetic', 'framerate': 15.0})
+    processing = launch('cv_bridge_test', params={'display': 'web', 'web_port': 0})
+    own_port = int(processing.wait_for_output(URL_LINE).group(1))
+    viewer = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0},
+                    remaps={'usb_camera/image': 'cv_bridge_image'}, name='viewer')
+    port = int(viewer.wait_for_output(URL_LINE).group(1))
+
+    state = wait_until(lambda: (lambda s: s if s['controls'] else None)(camera(port)), 30,
+                       interval=0.2, what='the camera controls behind cv_bridge_test')
+    assert state['topic'] == '/cv_bridge_image'
+    assert state['publisher'] == '/usbcam_publisher'
+    assert state['via'] == ['/cv_bridge_test']
+    assert 'cv_bridge_test' in state['message']
+    assert 'brightness' in state['controls']
+    # cv_bridge_test's own viewer shows the camera of its input.
+    own = wait_until(lambda: (lambda s: s if s['controls'] else None)(camera(own_port)), 30,
+                     interval=0.2, what="the controls in cv_bridge_test's viewer")
+    assert own['publisher'] == '/usbcam_publisher' and own['via'] == []
+    assert set(own['controls']) == set(state['controls'])
+
+
+def test_what_the_camera_is_comes_from_its_diagnostics_when_it_publishes_them(launch, peer):
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from sensor_msgs.msg import Image
+    # The peer stands in for a camera node: it publishes the topic and its diagnostics.
+    peer.node.create_publisher(Image, 'usb_camera/image', 10)
+    _, port, _ = start_viewer(launch)
+    state = wait_until(lambda: (lambda s: s if s['publisher'] else None)(camera(port)), 30,
+                       interval=0.2, what='the peer as the publisher')
+    assert state['publisher'] == '/test_peer'
+    wait_until(lambda: 'no camera controls' in camera(port)['message'], 15, interval=0.2,
+               what='"no camera controls" for a node without them')
+    assert camera(port)['camera'] == {'device': None, 'pixel_format': None, 'size': None,
+                                      'fps': None, 'requested_fps': None, 'status': None,
+                                      'diagnostics': False}
+
+    diagnostics = peer.node.create_publisher(DiagnosticArray, '/diagnostics', 10)
+    values = [
+        KeyValue(key='device', value='/dev/video4'), KeyValue(key='pixel format', value='MJPEG'),
+        KeyValue(key='size', value='1280x720'), KeyValue(key='frame rate', value='29.8'),
+        KeyValue(key='requested rate', value='30.0')]
+    status = DiagnosticStatus(name='test_peer: camera', hardware_id='/dev/video4', level=b'\x01',
+                              message='29.8 fps, requested 30.0', values=values)
+    other = DiagnosticStatus(name='someone_else: camera', values=[
+        KeyValue(key='pixel format', value='YUYV')])
+
+    def shown():
+        diagnostics.publish(DiagnosticArray(status=[other, status]))
+        return camera(port)['camera']['diagnostics']
+    wait_until(shown, 15, interval=0.3, what='the diagnostics in GET /camera')
+    assert camera(port)['camera'] == {'device': '/dev/video4', 'pixel_format': 'MJPEG',
+                                      'size': '1280x720', 'fps': 29.8, 'requested_fps': 30.0,
+                                      'status': 'WARN: 29.8 fps, requested 30.0',
+                                      'diagnostics': True}
