@@ -283,6 +283,7 @@ class EmulatedCamera:
             for index, name in sorted((c.get('menu') or {}).items()):
                 lines.append('menu %#x %d %s' % (c['id'], index, name))
         (self.dir / 'camera.conf').write_text('\n'.join(lines) + '\n')
+        (self.dir / 'empty').mkdir()  # listed in place of /dev/v4l/by-id where udev made none
 
     def _init_state(self, node, faults):
         path = self.dir / 'state'

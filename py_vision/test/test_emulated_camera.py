@@ -58,10 +58,12 @@ def error_of(call, *args):
 
 
 class Child:
-    """A Python process with the camera's environment, talking JSON lines with the test."""
+    """A Python process with the cameras' environment, talking JSON lines with the test."""
 
-    def __init__(self, camera, code):
-        env = camera.env(ros_harness.installed_env())
+    def __init__(self, cameras, code):
+        env = ros_harness.installed_env()
+        for camera in cameras if isinstance(cameras, (list, tuple)) else [cameras]:
+            env = camera.env(env)
         env['PYTHONPATH'] = os.pathsep.join([str(HERE), env.get('PYTHONPATH', '')])
         self.proc = subprocess.Popen(
             [sys.executable, '-u', '-c', PRELUDE + textwrap.dedent(code)], env=env,
@@ -103,9 +105,9 @@ class Child:
         assert status == 0, 'the child ended with %s:\n%s' % (status, err[-3000:])
 
 
-def run(camera, code, timeout=30.0):
-    """Run code in a child with the camera; return every message it said."""
-    child = Child(camera, code)
+def run(cameras, code, timeout=30.0):
+    """Run code in a child with the camera (or a list of them); return what it said."""
+    child = Child(cameras, code)
     try:
         out, err = child.proc.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -121,19 +123,24 @@ def run(camera, code, timeout=30.0):
 def test_the_device_paths_look_like_a_plugged_in_camera(emulated_camera):
     camera = emulated_camera()
     [seen] = run(camera, """
-        import stat
-        dev, by_id, by_path = sys.argv[1:4] if len(sys.argv) > 3 else (None, None, None)
+        import glob, stat
         st = os.stat('/dev/video40')
         link = os.lstat(%r)
         say(char=stat.S_ISCHR(st.st_mode), major=os.major(st.st_rdev), minor=os.minor(st.st_rdev),
             link=stat.S_ISLNK(link.st_mode), readlink=os.readlink(%r),
             real_id=os.path.realpath(%r), real_path=os.path.realpath(%r),
             exists=os.path.exists(%r), access=os.access('/dev/video40', os.R_OK | os.W_OK),
-            other=os.path.exists('/dev/video41'))
-    """ % (camera.by_id, camera.by_id, camera.by_id, camera.by_path, camera.by_id))
+            other=os.path.exists('/dev/video41'),
+            by_id=os.path.basename(%r) in os.listdir('/dev/v4l/by-id'),
+            by_path=os.path.basename(%r) in [
+                e.name for e in os.scandir('/dev/v4l/by-path') if e.is_symlink()],
+            nodes='/dev/video40' in glob.glob('/dev/video*'), dir=os.path.isdir('/dev/v4l'))
+    """ % (camera.by_id, camera.by_id, camera.by_id, camera.by_path, camera.by_id, camera.by_id,
+           camera.by_path))
     assert seen == {'char': True, 'major': 81, 'minor': 40, 'link': True,
                     'readlink': '../../video40', 'real_id': '/dev/video40',
-                    'real_path': '/dev/video40', 'exists': True, 'access': True, 'other': False}
+                    'real_path': '/dev/video40', 'exists': True, 'access': True, 'other': False,
+                    'by_id': True, 'by_path': True, 'nodes': True, 'dir': True}
     assert camera.device == '/dev/video40'
     assert camera.by_id.startswith('/dev/v4l/by-id/usb-PyVision_Emu_Webcam_1080p_')
 
@@ -469,3 +476,24 @@ def test_controls_change_on_one_thread_while_opencv_reads_on_another(emulated_ca
     """)
     assert all(b > a for a, b in zip(seen['indexes'], seen['indexes'][1:]))
     assert seen['sets'] > 10
+
+
+def test_two_cameras_in_one_process_and_a_format_the_camera_lacks(emulated_camera):
+    webcam = emulated_camera()
+    vga = emulated_camera(model='vga_yuyv', node=41)
+    [seen] = run([webcam, vga], """
+        caps = [cv2.VideoCapture(n, cv2.CAP_V4L2) for n in (40, 41)]
+        vga = caps[1]
+        vga.set(cv2.CAP_PROP_FOURCC, cv2.VideoWriter_fourcc(*'MJPG'))
+        vga.set(cv2.CAP_PROP_FRAME_WIDTH, 1920)
+        vga.set(cv2.CAP_PROP_FRAME_HEIGHT, 1080)
+        frames = [cap.read()[1] for cap in caps]
+        cards = [v4l2.querycap(v4l2.open_device(p))[1] for p in ('/dev/video40', '/dev/video41')]
+        say(shapes=[list(f.shape) for f in frames], cards=cards,
+            fourcc=v4l2.fourcc_text(int(vga.get(cv2.CAP_PROP_FOURCC))),
+            indexes=[read_frame_index(f) for f in frames])
+    """)
+    assert seen['cards'] == ['Emu Webcam 1080p', 'Emu VGA Camera']
+    # The VGA camera has no MJPEG and nothing above 640x480: it stays YUYV at its largest size.
+    assert seen['shapes'] == [[480, 640, 3], [480, 640, 3]] and seen['fourcc'] == 'YUYV'
+    assert None not in seen['indexes']

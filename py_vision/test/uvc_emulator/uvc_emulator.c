@@ -33,6 +33,7 @@
  */
 
 #define _GNU_SOURCE
+#include <dirent.h>
 #include <dlfcn.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -225,6 +226,10 @@ static int (*real_faccessat)(int, const char *, int, int);
 static ssize_t (*real_readlink)(const char *, char *, size_t);
 static ssize_t (*real_readlinkat)(int, const char *, char *, size_t);
 static char *(*real_realpath)(const char *, char *);
+static DIR *(*real_opendir)(const char *);
+static struct dirent *(*real_readdir)(DIR *);
+static struct dirent64 *(*real_readdir64)(DIR *);
+static int (*real_closedir)(DIR *);
 
 /* ------------------------------------------------------------------ set-up */
 
@@ -417,6 +422,10 @@ static void init(void)
     real_readlink = next_symbol("readlink");
     real_readlinkat = next_symbol("readlinkat");
     real_realpath = next_symbol("realpath");
+    real_opendir = next_symbol("opendir");
+    real_readdir = next_symbol("readdir");
+    real_readdir64 = next_symbol("readdir64");
+    real_closedir = next_symbol("closedir");
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     instance_id = ((uint64_t)ts.tv_nsec ^ ((uint64_t)ts.tv_sec << 20)) & 0x3FFFFFF;
@@ -447,7 +456,7 @@ __attribute__((constructor)) static void on_load(void)
 
 /* ------------------------------------------------------------------ paths */
 
-enum { PATH_NONE, PATH_DEVICE, PATH_LINK };
+enum { PATH_NONE, PATH_DEVICE, PATH_LINK, PATH_DIR };
 
 static int plugged(struct camera *cam)
 {
@@ -460,12 +469,34 @@ static int device_path(struct camera *cam, char *buf, size_t size)
                     __atomic_load_n(&cam->state->node, __ATOMIC_ACQUIRE));
 }
 
+/* The directories udev makes for the links: 1 /dev/v4l, 2 by-id, 3 by-path, else 0. */
+static int link_dir(const char *path)
+{
+    char buf[64];
+    size_t n = strlen(path);
+    if (n >= sizeof(buf))
+        return 0;
+    memcpy(buf, path, n + 1);
+    while (n > 1 && buf[n - 1] == '/')
+        buf[--n] = 0;
+    return !strcmp(buf, "/dev/v4l") ? 1 : !strcmp(buf, "/dev/v4l/by-id") ? 2
+        : !strcmp(buf, "/dev/v4l/by-path") ? 3 : 0;
+}
+
 /* Which emulated file a path names (only while its camera is plugged). */
 static int match_path(const char *path, struct camera **out)
 {
     char dev[64];
     if (!path || strncmp(path, "/dev/", 5) != 0)
         return PATH_NONE;
+    if (link_dir(path)) {
+        for (int i = 0; i < n_cameras; i++)
+            if (plugged(cameras[i])) {
+                *out = cameras[i];
+                return PATH_DIR;
+            }
+        return PATH_NONE;
+    }
     for (int i = 0; i < n_cameras; i++) {
         struct camera *cam = cameras[i];
         if (!plugged(cam))
@@ -499,7 +530,12 @@ static void fill_stat(struct camera *cam, int kind, struct stat *st)
     struct timespec now;
     clock_gettime(CLOCK_REALTIME, &now);
     st->st_atim = st->st_mtim = st->st_ctim = now;
-    if (kind == PATH_DEVICE) {
+    if (kind == PATH_DIR) {
+        st->st_mode = S_IFDIR | 0755;
+        st->st_nlink = 2;
+        st->st_size = 4096;
+        st->st_ino = 0x7d000;
+    } else if (kind == PATH_DEVICE) {
         st->st_mode = S_IFCHR | 0660;
         st->st_rdev = makedev(81, (unsigned)node);
         st->st_gid = 44;  /* video */
@@ -643,7 +679,7 @@ static int emulated_open(const char *path, int flags, int *result)
 {
     struct camera *cam;
     int kind = match_path(path, &cam);
-    if (kind == PATH_NONE)
+    if (kind == PATH_NONE || kind == PATH_DIR)
         return 0;
     if (kind == PATH_LINK && (flags & O_NOFOLLOW)) {
         errno = ELOOP;
@@ -2276,7 +2312,7 @@ static int stat_path(const char *path, struct stat *out, int follow, int *handle
     *handled = kind != PATH_NONE;
     if (!*handled)
         return 0;
-    fill_stat(cam, follow ? PATH_DEVICE : kind, out);
+    fill_stat(cam, follow && kind == PATH_LINK ? PATH_DEVICE : kind, out);
     return 0;
 }
 
@@ -2430,6 +2466,8 @@ static int access_check(const char *path, int mode, int follow, int *handled)
         errno = EACCES;
         return -1;
     }
+    if (kind == PATH_DIR)
+        return 0;
     if ((kind == PATH_DEVICE || follow) && (mode & X_OK)) {
         errno = EACCES;
         return -1;
@@ -2495,7 +2533,18 @@ EXPORT char *realpath(const char *path, char *resolved)
 {
     ensure_init();
     struct camera *cam;
-    if (n_cameras && match_path(path, &cam) != PATH_NONE) {
+    int kind = n_cameras ? match_path(path, &cam) : PATH_NONE;
+    if (kind == PATH_DIR) {
+        char dir[64];
+        int which = link_dir(path);
+        copy_text(dir, sizeof(dir), which == 1 ? "/dev/v4l" : which == 2 ? "/dev/v4l/by-id"
+                  : "/dev/v4l/by-path");
+        if (!resolved)
+            return strdup(dir);
+        copy_text(resolved, PATH_MAX, dir);
+        return resolved;
+    }
+    if (kind != PATH_NONE) {
         char dev[64];
         device_path(cam, dev, sizeof(dev));
         if (!resolved)
@@ -2509,4 +2558,153 @@ EXPORT char *realpath(const char *path, char *resolved)
 EXPORT char *canonicalize_file_name(const char *path)
 {
     return realpath(path, NULL);
+}
+
+/* ---- directory listings: /dev gets the video nodes, /dev/v4l/by-* the links */
+
+#define MAX_LISTINGS 16
+
+struct listing {
+    DIR *dir;
+    int which;               /* 0 /dev, 1 /dev/v4l, 2 by-id, 3 by-path */
+    int real;                /* the directory exists for real */
+    int next;                /* next made-up entry */
+    struct dirent64 entry;
+};
+
+static struct listing listings[MAX_LISTINGS];
+static pthread_mutex_t listing_lock = PTHREAD_MUTEX_INITIALIZER;
+
+static int dev_dir(const char *path)
+{
+    return !strcmp(path, "/dev") || !strcmp(path, "/dev/");
+}
+
+EXPORT DIR *opendir(const char *path)
+{
+    ensure_init();
+    int which = -1;
+    struct camera *cam = NULL;
+    if (n_cameras && path) {
+        if (dev_dir(path))
+            which = 0;
+        else if (match_path(path, &cam) == PATH_DIR)
+            which = link_dir(path);
+    }
+    DIR *dir = real_opendir(path);
+    int real = dir != NULL;
+    if (which < 0)
+        return dir;
+    if (!dir) {
+        /* udev's directory does not exist here: list an empty one and add the links */
+        char empty[PATH_MAX + 16];
+        snprintf(empty, sizeof(empty), "%s/empty", cameras[0]->dir);
+        dir = real_opendir(empty);
+        if (!dir)
+            return NULL;
+    }
+    pthread_mutex_lock(&listing_lock);
+    for (int i = 0; i < MAX_LISTINGS; i++)
+        if (!listings[i].dir) {
+            memset(&listings[i], 0, sizeof(listings[i]));
+            listings[i].dir = dir;
+            listings[i].which = which;
+            listings[i].real = real;
+            break;
+        }
+    pthread_mutex_unlock(&listing_lock);
+    return dir;
+}
+
+/* The k-th made-up entry of a listing, or 0 when there are no more. */
+static int made_up(struct listing *l, int k, char *name, size_t size, unsigned char *type)
+{
+    int seen = 0;
+    if (l->which == 1) {
+        if (l->real)
+            return 0;
+        if (k > 1)
+            return 0;
+        copy_text(name, size, k == 0 ? "by-id" : "by-path");
+        *type = DT_DIR;
+        return 1;
+    }
+    for (int i = 0; i < n_cameras; i++) {
+        struct camera *cam = cameras[i];
+        if (!plugged(cam))
+            continue;
+        if (seen++ != k)
+            continue;
+        if (l->which == 0) {
+            snprintf(name, size, "video%d", __atomic_load_n(&cam->state->node, __ATOMIC_ACQUIRE));
+            *type = DT_CHR;
+        } else {
+            const char *link = l->which == 2 ? cam->by_id : cam->by_path;
+            const char *base = strrchr(link, '/');
+            copy_text(name, size, base ? base + 1 : link);
+            *type = DT_LNK;
+        }
+        return 1;
+    }
+    return 0;
+}
+
+static struct listing *listing_of(DIR *dir)
+{
+    for (int i = 0; i < MAX_LISTINGS; i++)
+        if (listings[i].dir == dir)
+            return &listings[i];
+    return NULL;
+}
+
+static struct dirent64 *next_made_up(DIR *dir)
+{
+    pthread_mutex_lock(&listing_lock);
+    struct listing *l = listing_of(dir);
+    struct dirent64 *result = NULL;
+    if (l) {
+        unsigned char type = DT_UNKNOWN;
+        memset(&l->entry, 0, sizeof(l->entry));
+        if (made_up(l, l->next, l->entry.d_name, sizeof(l->entry.d_name), &type)) {
+            l->next++;
+            l->entry.d_type = type;
+            l->entry.d_ino = 0x7c000 + (ino64_t)l->next;
+            l->entry.d_reclen = sizeof(l->entry);
+            result = &l->entry;
+        }
+    }
+    pthread_mutex_unlock(&listing_lock);
+    return result;
+}
+
+EXPORT struct dirent *readdir(DIR *dir)
+{
+    ensure_init();
+    struct dirent *entry = real_readdir(dir);
+    if (entry || !n_cameras)
+        return entry;
+    return (struct dirent *)next_made_up(dir);
+}
+
+EXPORT struct dirent64 *readdir64(DIR *dir)
+{
+    ensure_init();
+    struct dirent64 *entry = real_readdir64 ? real_readdir64(dir)
+        : (struct dirent64 *)real_readdir(dir);
+    if (entry || !n_cameras)
+        return entry;
+    return next_made_up(dir);
+}
+
+EXPORT int closedir(DIR *dir)
+{
+    ensure_init();
+    if (n_cameras) {
+        pthread_mutex_lock(&listing_lock);
+        struct listing *l = listing_of(dir);
+        if (l)
+            l->dir = NULL;
+        pthread_mutex_unlock(&listing_lock);
+    }
+    return real_closedir(dir);
 }
