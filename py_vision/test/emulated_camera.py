@@ -58,7 +58,7 @@ _MAGIC = 0x45435655
 _STATE_SIZE = 4096
 _OFF_NODE, _OFF_PLUGGED, _OFF_GENERATION, _OFF_STALLED, _OFF_DENIED = 4, 8, 12, 16, 20
 _OFF_OWNER, _OFF_FORMAT, _OFF_FRAME, _OFF_INTERVAL = 24, 32, 36, 40
-_OFF_SENSOR, _OFF_SERVED, _OFF_VALUES = 48, 56, 64
+_OFF_SENSOR, _OFF_SERVED, _OFF_VALUES, _OFF_RENDER_NS = 48, 56, 64, 320
 _MAX_CONTROLS = 48
 _TYPES = {'integer': 1, 'boolean': 2, 'menu': 3}
 _FLAG_READ_ONLY = 0x4
@@ -336,6 +336,11 @@ class EmulatedCamera:
     def frames_served(self):
         """Return how many frames went into streaming buffers so far (all processes)."""
         return self._get('Q', _OFF_SERVED)
+
+    @property
+    def render_seconds(self):
+        """Return the CPU time the library spent making frames so far (all processes)."""
+        return self._get('Q', _OFF_RENDER_NS) / 1e9
 
     @property
     def next_index(self):

@@ -88,6 +88,7 @@ struct shared_state {
     uint64_t sensor_frames;  /* 48: index of the next frame the sensor makes */
     uint64_t frames_served;  /* 56: frames delivered into buffers */
     int32_t values[64];      /* 64: control values, in camera.conf order */
+    uint64_t render_ns;      /* 320: CPU time spent making frames (all processes) */
 };
 
 struct frame_desc {
@@ -1207,7 +1208,13 @@ static void *producer(void *arg)
         memmove(h->queued, h->queued + 1, --h->n_queued * sizeof(uint32_t));
         h->in_flight++;
         pthread_mutex_unlock(&h->lock);
+        struct timespec c0, c1;
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
         uint32_t used = render_frame(h, b, index);
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
+        __atomic_fetch_add(&s->render_ns, (uint64_t)((c1.tv_sec - c0.tv_sec) * 1000000000LL
+                                                     + (c1.tv_nsec - c0.tv_nsec)),
+                           __ATOMIC_ACQ_REL);
         struct timeval tv = {(time_t)due, (suseconds_t)((due - (time_t)due) * 1e6)};
         pthread_mutex_lock(&h->lock);
         struct buffer *buf = &h->buffers[b];
