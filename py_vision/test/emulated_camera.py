@@ -63,6 +63,7 @@ _MAX_CONTROLS = 48
 _TYPES = {'integer': 1, 'boolean': 2, 'menu': 3}
 _FLAG_READ_ONLY = 0x4
 _FAULTS = ('stalled', 'denied')
+EFFECTS = ('brightness', 'contrast', 'saturation', 'gain', 'exposure', 'white_balance')
 
 
 class CompilerMissing(RuntimeError):
@@ -213,6 +214,9 @@ def load_model(model):
     by_name = {c['name']: c for c in data['controls']}
     for index, control in enumerate(data['controls']):
         control['index'] = index
+        if control.get('effect') not in (None,) + EFFECTS:
+            raise ValueError('%s: %s has effect %r, not one of %s'
+                             % (path, control['name'], control['effect'], ', '.join(EFFECTS)))
         for master in control.get('inactive_unless', {}):
             if master not in by_name:
                 raise ValueError('%s: %s depends on unknown control %s'
@@ -282,6 +286,8 @@ class EmulatedCamera:
                 flags, master_id, manual, c['label']))
             for index, name in sorted((c.get('menu') or {}).items()):
                 lines.append('menu %#x %d %s' % (c['id'], index, name))
+            if c.get('effect'):
+                lines.append('effect %#x %s' % (c['id'], c['effect']))
         (self.dir / 'camera.conf').write_text('\n'.join(lines) + '\n')
         (self.dir / 'empty').mkdir()  # listed in place of /dev/v4l/by-id where udev made none
 

@@ -497,3 +497,38 @@ def test_two_cameras_in_one_process_and_a_format_the_camera_lacks(emulated_camer
     # The VGA camera has no MJPEG and nothing above 640x480: it stays YUYV at its largest size.
     assert seen['shapes'] == [[480, 640, 3], [480, 640, 3]] and seen['fourcc'] == 'YUYV'
     assert None not in seen['indexes']
+
+
+def test_controls_change_the_picture_live_and_the_defaults_restore_it(emulated_camera):
+    camera = emulated_camera()
+    [seen] = run(camera, """
+        cap = cv2.VideoCapture('/dev/video40', cv2.CAP_V4L2)
+        fd = v4l2.open_device('/dev/video40')
+
+        def settled():  # the buffers already filled hold the old picture
+            return [cap.read()[1] for _ in range(6)][-1]
+
+        def colour(image):  # how far from grey the picture is
+            return float(image.astype(float).std(axis=2).mean())
+
+        out = {'start': float(settled().mean())}
+        v4l2.set_control(fd, 0x00980900, 255)           # brightness up
+        out['bright'] = float(settled().mean())
+        v4l2.set_control(fd, 0x00980900, 128)
+        v4l2.set_ext_controls(fd, [(0x009a0901, 1), (0x009a0902, 125)])  # half the exposure
+        out['dark'] = float(settled().mean())
+        v4l2.set_control(fd, 0x009a0901, 3)             # auto again: exposure ignored
+        frame = settled()
+        index = read_frame_index(frame)
+        out['back'] = int(np.abs(frame.astype(int) - cv2.cvtColor(
+            expected_yuyv(index, 640, 480), cv2.COLOR_YUV2BGR_YUYV).astype(int)).max())
+        cap.set(cv2.CAP_PROP_FOURCC, cv2.VideoWriter_fourcc(*'MJPG'))
+        out['colour'] = colour(settled())
+        v4l2.set_control(fd, 0x00980902, 0)             # saturation 0: grey
+        grey = settled()
+        out['grey'], out['grey_index'] = colour(grey), read_frame_index(grey)
+        say(**out)
+    """)
+    assert seen['bright'] > seen['start'] + 20 and seen['dark'] < seen['start'] - 20, seen
+    assert seen['back'] == 0, 'controls back at their defaults give the picture again'
+    assert seen['grey'] < seen['colour'] / 5 and seen['grey_index'] is not None, seen
