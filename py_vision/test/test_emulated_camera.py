@@ -532,3 +532,37 @@ def test_controls_change_the_picture_live_and_the_defaults_restore_it(emulated_c
     assert seen['bright'] > seen['start'] + 20 and seen['dark'] < seen['start'] - 20, seen
     assert seen['back'] == 0, 'controls back at their defaults give the picture again'
     assert seen['grey'] < seen['colour'] / 5 and seen['grey_index'] is not None, seen
+
+
+def test_fork_and_exec_leave_the_parent_streaming(emulated_camera):
+    camera = emulated_camera(model='vga_yuyv')
+    [seen] = run(camera, """
+        cap = cv2.VideoCapture('/dev/video40', cv2.CAP_V4L2)
+        fd = v4l2.open_device('/dev/video40')
+        before = read_frame_index(cap.read()[1])
+        pid = os.fork()
+        if pid == 0:  # the child closes its copies (explicitly, and by exiting)
+            os.close(fd)
+            os._exit(0)
+        _, status = os.waitpid(pid, 0)
+        import subprocess
+        subprocess.run([sys.executable, '-c', 'pass'], check=True)  # fork and exec
+        after = [read_frame_index(cap.read()[1]) for _ in range(3)]
+        say(status=status, before=before, after=after, caps=v4l2.querycap(fd)[0])
+    """)
+    assert seen['status'] == 0 and seen['caps'] == 'uvcvideo'
+    assert None not in seen['after'] and seen['after'][0] > seen['before']
+
+
+def test_two_test_runs_building_the_library_at_once_both_get_it(tmp_path):
+    build = ('import emulated_camera, ctypes; path = emulated_camera.build_library(); '
+             'ctypes.CDLL(str(path)); print(path)')
+    env = dict(os.environ, PY_VISION_UVC_CACHE=str(tmp_path),
+               PYTHONPATH=os.pathsep.join([str(HERE), os.environ.get('PYTHONPATH', '')]))
+    builds = [subprocess.Popen([sys.executable, '-c', build], env=env, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    results = [b.communicate(timeout=120) for b in builds]
+    assert [b.returncode for b in builds] == [0, 0], [err for _, err in results]
+    paths = {out.strip() for out, _ in results}
+    assert len(paths) == 1, paths
+    assert [p.name for p in tmp_path.iterdir()] == [os.path.basename(paths.pop())]

@@ -207,6 +207,7 @@ static pthread_once_t init_once = PTHREAD_ONCE_INIT;
 static uint64_t instance_id;
 static uint32_t next_token;
 static uint32_t kernel_version;
+static pid_t table_pid;    /* the process the handle table belongs to (not a vfork child) */
 
 static int (*real_open)(const char *, int, ...);
 static int (*real_open64)(const char *, int, ...);
@@ -397,6 +398,7 @@ static void load_camera(const char *dir)
 
 static void after_fork_child(void)
 {
+    table_pid = getpid();
     pthread_mutex_init(&table_lock, NULL);
     for (int i = 0; i < MAX_FDS; i++) {
         struct handle *h = handles[i];
@@ -460,7 +462,15 @@ static void init(void)
             load_camera(dir);
         free(copy);
     }
+    table_pid = getpid();
     pthread_atfork(NULL, NULL, after_fork_child);
+}
+
+/* A vfork child (subprocess closing descriptors before exec) shares our memory but runs no
+ * fork handlers: it must leave the table alone. */
+static int table_is_ours(void)
+{
+    return getpid() == table_pid;
 }
 
 static void ensure_init(void)
@@ -601,7 +611,7 @@ static int dead(struct handle *h)
 
 static struct handle *lookup(int fd)
 {
-    if (fd < 0 || fd >= MAX_FDS || !n_cameras)
+    if (fd < 0 || fd >= MAX_FDS || !n_cameras || !table_is_ours())
         return NULL;
     pthread_mutex_lock(&table_lock);
     struct handle *h = handles[fd];
@@ -684,7 +694,7 @@ static int open_device(struct camera *cam, int flags)
 /* Any real open that returns a number we still hold means that entry is stale. */
 static int forget_stale(int fd)
 {
-    if (fd >= 0 && fd < MAX_FDS && n_cameras) {
+    if (fd >= 0 && fd < MAX_FDS && n_cameras && table_is_ours()) {
         pthread_mutex_lock(&table_lock);
         struct handle *h = handles[fd];
         handles[fd] = NULL;
