@@ -230,8 +230,10 @@ class EmulatedCamera:
 
     `state_dir` holds its directory (a test's temporary directory); `model` names a data file
     in uvc_emulator/cameras (or is a path to one); `node` is the N of /dev/videoN. Options:
-    `serial` (by-id name; the data file's by default), `stalled` and `denied` (start with that
-    fault), `corrupt_every` (overrides the data file's broken-JPEG period; 0: never).
+    `serial` and `usb_port` (the by-id and by-path names; the data file's by default),
+    `stalled` and `denied` (start with that fault), `corrupt_every` (overrides the data
+    file's broken-JPEG period; 0: never). `close()` unplugs it and removes its directory (the
+    `emulated_camera` fixture does this after the test).
     """
 
     def __init__(self, state_dir, model='webcam_1080p', node=40, **faults):
