@@ -19,18 +19,19 @@ The ROS 2 port of the tutorial's publisher, grown into a driver. Frames are read
 thread (the camera paces itself), stamped with their capture time and published at once: raw
 bgr8 on usb_camera/image, JPEG on usb_camera/image/compressed (the camera's own JPEG untouched
 in MJPEG mode), each only while it has subscribers, and the CameraInfo of every frame on
-usb_camera/camera_info with exactly the image's header. A camera that fails mid-stream is
-released and reopened with back-off; publishing resumes when it is back and the controls the
-user set are applied again. The node is a thin adapter: the camera itself is camera.Camera.
+usb_camera/camera_info with exactly the image's header. The node is a thin adapter: it
+keeps the parameters, publishers and services; opening, reading, losing and reopening the camera
+is the camera layer's CaptureLoop (py_vision.capture), which calls publish_image() with each new
+frame.
 """
 
-import threading
 import time
 
 import cv2
 from py_vision import dds
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
-from py_vision.camera import Camera, CONTROL_NAMES, PIXEL_FORMATS, SourceError
+from py_vision.capture import (
+    Camera, CaptureLoop, PIXEL_FORMATS, SourceError, SyntheticDevices, USB_CAM_ALIASES)
 from py_vision.cv_bridge import CvBridge
 from py_vision.node_main import ConfigError, main_for
 from py_vision.params import Parameters, Spec
@@ -44,10 +45,6 @@ from sensor_msgs.msg import CameraInfo
 from sensor_msgs.srv import SetCameraInfo
 from std_msgs.msg import Header
 
-# Consecutive failed reads after which the device counts as gone (one bad read is noise).
-LOST_AFTER_FAILED_READS = 5
-REOPEN_BACKOFF_S = (0.25, 0.5, 1.0, 2.0, 4.0)
-REOPEN_LOG_PERIOD_S = 5.0
 IMAGE_TOPIC = 'usb_camera/image'
 
 
@@ -104,10 +101,9 @@ class USBImagePublisher(Node):
     ) + _CONTROL_SPECS
 
     # What close() finds when start-up was interrupted before these were made.
-    camera = None
-    _thread = None
+    capture = None
     _log_name = NODE_NAME
-    frames_captured = raw_published = compressed_published = frames_decoded = 0
+    raw_published = compressed_published = frames_decoded = 0
 
     def __init__(self):
         super().__init__(self.NODE_NAME)
@@ -118,13 +114,9 @@ class USBImagePublisher(Node):
         # which spin after every parallel call: one thread halves the capture's CPU
         # (bench/bench_transport.py).
         cv2.setNumThreads(1)
-        self._stop = threading.Event()
-        self._camera_lock = threading.Lock()
-        self.camera = None
-        self._controls = {}
         params = Parameters(self)
         live = {'jpeg_quality': self._set_jpeg_quality, 'frame_id': self._set_frame_id}
-        live.update({name: self._control_setter(name) for name in CONTROL_NAMES})
+        live.update({name: self._control_setter(name) for name in USB_CAM_ALIASES})
         values = {spec.name: params.declare(spec, live.get(spec.name))
                   for spec in self.PARAMETERS}
         self.video_device = values['video_device']
@@ -132,16 +124,21 @@ class USBImagePublisher(Node):
         self.framerate = values['framerate']
         self.pixel_format = values['pixel_format']
         self.frame_id = values['frame_id']
-        self._controls = {name: values[name] for name in CONTROL_NAMES
-                          if values[name] is not None}
 
         qos = publisher_qos(values['reliability'], values['depth'])
         self.images = ImagePublisher(self, IMAGE_TOPIC, qos, CvBridge())
         self.images.jpeg_quality = values['jpeg_quality']
         self.info_publisher = self.create_publisher(
             CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
+        self._synthetic = SyntheticDevices()
+        self.failed = False
+        self.capture = CaptureLoop(self._open_camera, self.publish_image, self.get_logger(),
+                                   name=self.video_device, on_failure=self._capture_failed)
+        for name in USB_CAM_ALIASES:
+            if values[name] is not None:
+                self.capture.set_control(name, values[name])
         try:
-            self.camera = self._open()
+            self.capture.open()
         except SourceError as error:
             raise ConfigError(str(error))
         self.calibration = CameraInfoManager(
@@ -149,10 +146,7 @@ class USBImagePublisher(Node):
         self.calibration.load()
         self.create_service(SetCameraInfo, sibling_topic(self, IMAGE_TOPIC, 'set_camera_info'),
                             self._set_camera_info)
-        self._apply_controls(self.camera, at_start=True)
-        self.failed = False
-        self._thread = threading.Thread(target=self._capture_loop, name='capture', daemon=True)
-        self._thread.start()
+        self.capture.start()
 
     # --- parameters ------------------------------------------------------------------
 
@@ -164,30 +158,10 @@ class USBImagePublisher(Node):
 
     def _control_setter(self, name):
         def apply(value):
-            with self._camera_lock:
-                camera = self.camera
-                if camera is None:  # reconnecting: applied when the camera is back
-                    self._controls[name] = value
-                    return None
-                ok, got, message = camera.set_control(name, value)
-            if not ok:
-                return message
-            self._controls[name] = value
-            if message:
-                self.get_logger().info(message)
-            return None
+            if self.capture is None:  # declared before the camera opens: applied at open
+                return None
+            return self.capture.set_control(name, value)
         return apply
-
-    def _apply_controls(self, camera, at_start=False):
-        """Set every control the user gave; one warning for each the camera does not take."""
-        for name, value in list(self._controls.items()):
-            ok, got, message = camera.set_control(name, value)
-            if not ok:
-                self.get_logger().warning("%s; left at the camera's own value" % message)
-                if at_start:
-                    del self._controls[name]
-            elif message:
-                self.get_logger().info(message)
 
     # --- calibration -----------------------------------------------------------------
 
@@ -200,9 +174,10 @@ class USBImagePublisher(Node):
 
     # --- capture ---------------------------------------------------------------------
 
-    def _open(self):
+    def _open_camera(self):
+        """Open the camera the parameters name (called by the capture loop at each (re)open)."""
         camera = Camera.open(self.video_device, self.size[0], self.size[1], self.framerate,
-                             self.pixel_format)
+                             self.pixel_format, synthetic=self._synthetic)
         note = ''
         if (camera.width, camera.height) != self.size:
             note = ' (requested %dx%d; publishing what the device gives)' % self.size
@@ -212,55 +187,17 @@ class USBImagePublisher(Node):
             self.get_logger().warning(line)
         return camera
 
-    def _capture_loop(self):
-        """Read, stamp and publish frames until close(); the camera belongs to this thread."""
-        try:
-            self._capture()
-        except Exception as error:
-            if self.context.ok():
-                # A device or frame this node cannot handle: say so and end the node.
-                self.get_logger().error('capturing from %s failed: %s: %s' % (
-                    self.video_device, type(error).__name__, error))
-                self.failed = True
-                try:
-                    rclpy.try_shutdown(context=self.context)
-                except Exception:  # a signal shut it down at the same moment
-                    pass
-            # else: Ctrl-C or SIGTERM shut rclpy down while a frame was being published.
-        finally:
-            with self._camera_lock:
-                camera, self.camera = self.camera, None
-            if camera is not None:
-                camera.release()
-
-    def _capture(self):
-        failed_reads = 0
-        while not self._stop.is_set():
-            camera = self.camera
-            if camera is None:
-                camera = self._reopen()
-                with self._camera_lock:
-                    self.camera = camera
-                    if camera is not None:
-                        self._apply_controls(camera)
-                continue
-            with self._camera_lock:
-                frame = camera.read()
-            if self._stop.is_set():
-                return
-            if frame is None:
-                failed_reads += 1
-                if failed_reads >= LOST_AFTER_FAILED_READS:
-                    self.get_logger().warning(
-                        'lost %s after %d failed reads; releasing it and reopening' % (
-                            self.video_device, failed_reads))
-                    with self._camera_lock:
-                        self.camera = None
-                    camera.release()
-                    failed_reads = 0
-                continue
-            failed_reads = 0
-            self._publish(camera, frame)
+    def _capture_failed(self, error):
+        """Say that a frame could not be published, and end the node."""
+        if self.context.ok():
+            self.get_logger().error('capturing from %s failed: %s: %s' % (
+                self.video_device, type(error).__name__, error))
+            self.failed = True
+            try:
+                rclpy.try_shutdown(context=self.context)
+            except Exception:  # a signal shut it down at the same moment
+                pass
+        # else: Ctrl-C or SIGTERM shut rclpy down while a frame was being published.
 
     def _capture_stamp(self, captured):
         """Return the capture time (time.monotonic(), or None) of a frame as a ROS time."""
@@ -272,7 +209,8 @@ class USBImagePublisher(Node):
             return now
         return Time(nanoseconds=now.nanoseconds - int(age_s * 1e9), clock_type=now.clock_type)
 
-    def _publish(self, camera, frame):
+    def publish_image(self, camera, frame):
+        """Publish one frame: image (raw and compressed, as subscribed) and its CameraInfo."""
         header = Header(stamp=self._capture_stamp(frame.capture_time).to_msg(),
                         frame_id=self.frame_id)
         raw, compressed = self.images.publish(header, frame.bgr, frame.jpeg)
@@ -280,53 +218,26 @@ class USBImagePublisher(Node):
         info = self.calibration.camera_info(camera.width, camera.height)
         info.header = header
         self.info_publisher.publish(info)
-        self.frames_captured += 1
         self.raw_published += raw
         self.compressed_published += compressed
 
-    def _reopen(self):
-        """Try to reopen the device with back-off until it is back or the node stops."""
-        attempt = 0
-        last_log = 0.0
-        while not self._stop.is_set():
-            delay = REOPEN_BACKOFF_S[min(attempt, len(REOPEN_BACKOFF_S) - 1)]
-            if self._stop.wait(delay):
-                return None
-            attempt += 1
-            try:
-                camera = self._open()
-            except SourceError as error:
-                if time.monotonic() - last_log >= REOPEN_LOG_PERIOD_S:
-                    last_log = time.monotonic()
-                    self.get_logger().warning('reopen attempt %d failed: %s' % (attempt, error))
-                continue
-            self.get_logger().info('%s is back after %d attempt(s); publishing resumes' % (
-                self.video_device, attempt))
-            return camera
-        return None
-
     def close(self):
-        """Stop capturing; the capture thread releases the camera."""
-        thread = self._thread
-        logger = get_logger(self._log_name + '.camera')
-        if thread is None:  # start-up was interrupted before capturing began
-            if self.camera is not None:
-                self.camera.release()
-                logger.info('camera released before capturing began')
+        """Stop capturing and release the camera."""
+        capture = self.capture
+        if capture is None:  # start-up was interrupted before the camera layer existed
             return
-        self._stop.set()
-        camera = self.camera
-        if camera is not None:
-            camera.interrupt()  # a synthetic camera or a file waiting for its next frame
-        thread.join(2.0)
-        if thread.is_alive():
+        logger = get_logger(self._log_name + '.camera')
+        started, opened = capture.running, capture.camera is not None
+        if not capture.close():
             logger.warning('%s is still busy; the system releases it at exit' % self.video_device)
-        else:
+        elif started:
             logger.info('camera released after %d frames (%d raw, %d compressed published; '
                         '%d JPEG encoded, %d decoded)' % (
-                            self.frames_captured, self.raw_published,
+                            capture.stats().frames, self.raw_published,
                             self.compressed_published, self.images.encoded,
                             self.frames_decoded))
+        elif opened:
+            logger.info('camera released before capturing began')
 
 
 main = main_for(USBImagePublisher)
