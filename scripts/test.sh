@@ -48,6 +48,26 @@ install_chromium() {
 }
 install_chromium
 
+# The emulated UVC cameras (py_vision/test/uvc_emulator) are a small C library the tests compile
+# with the system C compiler. Install one from the distribution where `cc` is missing (as root,
+# with apt); otherwise say so: those tests are then skipped, and in CI they fail.
+install_compiler() {
+  local log=/tmp/py_vision-apt.log
+  if command -v cc >/dev/null 2>&1 || command -v gcc >/dev/null 2>&1; then
+    return
+  fi
+  if [ "$(id -u)" != 0 ] || ! command -v apt-get >/dev/null 2>&1; then
+    echo '[test] no C compiler (cc): the emulated-camera tests will be skipped (in CI: fail)' \
+      '(install one: apt-get install gcc)'
+    return
+  fi
+  echo '[test] installing a C compiler (gcc) for the emulated-camera tests'
+  [ "$in_ci" = true ] && { apt-get update -qq >$log 2>&1 || true; }
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-upgrade gcc libc6-dev >>$log 2>&1 \
+    || echo "[test] could not install gcc (see $log)"
+}
+install_compiler
+
 # pytest exits 5 when it ran no test: that is a failure, except that a -k or -m that matches
 # none of a run's tests may leave that run empty.
 check_ran_tests() {

@@ -19,6 +19,7 @@ import shutil
 import sys
 import tempfile
 
+from emulated_camera import CompilerMissing, EmulatedCamera
 import pytest
 import ros_harness
 
@@ -121,3 +122,32 @@ def peer(domain_id):
     node = ros_harness.RosPeer(domain_id)
     yield node
     node.close()
+
+
+@pytest.fixture
+def emulated_camera():
+    """
+    Give a factory of emulated UVC cameras, called as EmulatedCamera is, without its directory.
+
+    For example ``emulated_camera(model='vga_yuyv', node=41)``. Each camera is an
+    `EmulatedCamera` (emulated_camera.py) in a directory of this test's own, unplugged and
+    removed after the test; a process sees it when started with ``camera.env(base_env)``
+    (e.g. ``launch('usbcam_publisher', env=camera.env(ros_env))``). Without a C compiler the
+    test is skipped with the reason, and fails in CI.
+    """
+    state_dir = tempfile.mkdtemp(prefix='py_vision_uvc_')
+    made = []
+
+    def make(model='webcam_1080p', node=40, **faults):
+        try:
+            camera = EmulatedCamera(state_dir, model, node, **faults)
+        except CompilerMissing as error:
+            if os.environ.get('CI') == 'true':
+                pytest.fail(str(error))
+            pytest.skip(str(error))
+        made.append(camera)
+        return camera
+    yield make
+    for camera in made:
+        camera.close()
+    shutil.rmtree(state_dir, ignore_errors=True)

@@ -1,0 +1,453 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+Emulated UVC cameras for the tests: a device path that answers the V4L2 API as uvcvideo does.
+
+`EmulatedCamera` describes one camera (a data file in uvc_emulator/cameras/) to the C library
+uvc_emulator/uvc_emulator.c, which a process loads with LD_PRELOAD (`env()` gives the
+variables): in that process /dev/videoN, /dev/v4l/by-id/... and /dev/v4l/by-path/... are the
+camera, for OpenCV's V4L2 backend and for any ioctl. The camera's state lives in a small file
+in its directory, shared by every process using it and by this object, which changes it to
+inject faults (unplug, replug under another node, stall, permission denied) and reads it back
+(control values, frames served). `busy()` streams from it in another process.
+
+Frames are the synthetic camera's picture (py_vision.synthetic_camera) without the moving box
+and digits: its background for the size, and the 4 x 11 frame-index code that
+`read_frame_index` decodes, drawn by the library for each frame's index. How it works and the
+data-file format: docs/emulated_cameras.md.
+"""
+
+import contextlib
+import hashlib
+import mmap
+import os
+from pathlib import Path
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+
+import cv2
+import numpy as np
+import yaml
+
+HERE = Path(__file__).resolve().parent
+SOURCE = HERE / 'uvc_emulator' / 'uvc_emulator.c'
+CAMERAS = HERE / 'uvc_emulator' / 'cameras'
+CFLAGS = ['-O2', '-shared', '-fPIC', '-Wall']
+LIBS = ['-lpthread', '-ldl', '-lm']
+ENV_CAMERAS = 'PY_VISION_UVC_CAMERAS'
+JPEG_QUALITY = 80
+
+# The shared state file (struct shared_state in uvc_emulator.c).
+_MAGIC = 0x45435655
+_STATE_SIZE = 4096
+_OFF_NODE, _OFF_PLUGGED, _OFF_GENERATION, _OFF_STALLED, _OFF_DENIED = 4, 8, 12, 16, 20
+_OFF_OWNER, _OFF_FORMAT, _OFF_FRAME, _OFF_INTERVAL = 24, 32, 36, 40
+_OFF_SENSOR, _OFF_SERVED, _OFF_VALUES = 48, 56, 64
+_MAX_CONTROLS = 48
+_TYPES = {'integer': 1, 'boolean': 2, 'menu': 3}
+_FLAG_READ_ONLY = 0x4
+_FAULTS = ('stalled', 'denied')
+
+
+class CompilerMissing(RuntimeError):
+    """No C compiler: the emulated cameras cannot be built."""
+
+
+def cache_dir():
+    """Return the directory (outside git) where the library and pictures are kept."""
+    root = os.environ.get('PY_VISION_UVC_CACHE') or os.path.join(
+        tempfile.gettempdir(), 'py_vision-uvc-emulator-%d' % os.getuid())
+    os.makedirs(root, exist_ok=True)
+    return Path(root)
+
+
+def _atomic_write(path, data):
+    """Write a file under a temporary name and rename it: concurrent writers are safe."""
+    fd, tmp = tempfile.mkstemp(dir=str(path.parent), prefix='.' + path.name + '.')
+    try:
+        with os.fdopen(fd, 'wb') as out:
+            out.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def compiler():
+    """Return the system C compiler's command, or None."""
+    for name in (os.environ.get('CC'), 'cc', 'gcc', 'clang'):
+        if name and shutil.which(name):
+            return name
+    return None
+
+
+def build_library():
+    """
+    Compile uvc_emulator.c once per source change and return the shared library's path.
+
+    The library is named by a hash of the source and the flags, compiled under a temporary
+    name and renamed, so two test runs building at once both end with a complete file.
+    """
+    source = SOURCE.read_bytes()
+    digest = hashlib.sha256(source + ' '.join(CFLAGS + LIBS).encode()).hexdigest()[:16]
+    library = cache_dir() / ('uvc_emulator-%s.so' % digest)
+    if library.exists():
+        return library
+    cc = compiler()
+    if cc is None:
+        raise CompilerMissing(
+            'no C compiler (cc) to build the emulated UVC camera: install one (Debian: '
+            'apt-get install gcc; scripts/test.sh does this as root)')
+    tmp = library.with_name('.%s.%d.so' % (library.stem, os.getpid()))
+    result = subprocess.run([cc, *CFLAGS, '-o', str(tmp), str(SOURCE), *LIBS],
+                            capture_output=True, text=True)
+    if result.returncode != 0:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise RuntimeError('compiling %s failed:\n%s' % (SOURCE, result.stderr))
+    os.replace(tmp, library)
+    return library
+
+
+def _synthetic():
+    from py_vision import synthetic_camera
+    return synthetic_camera
+
+
+def _picture_key():
+    module = _synthetic()
+    return hashlib.sha256(Path(module.__file__).read_bytes()).hexdigest()[:12]
+
+
+def background(width, height):
+    """Return the YUYV picture of this size every frame starts from ((h, w, 2) uint8)."""
+    sc = _synthetic()
+    path = cache_dir() / ('background-%dx%d-%s.yuyv' % (width, height, _picture_key()))
+    if path.exists() and path.stat().st_size == width * height * 2:
+        return np.fromfile(str(path), np.uint8).reshape(height, width, 2)
+    picture = sc._layout(width, height).background.copy()
+    _atomic_write(path, picture.tobytes())
+    return picture
+
+
+def code_geometry(width, height):
+    """Return (x, y, cell) of the frame-index code at this size, or (0, 0, 0) if none."""
+    code = _synthetic()._geometry(width, height).code
+    return code if code is not None else (0, 0, 0)
+
+
+def expected_yuyv(index, width, height):
+    """Return the YUYV frame an emulated camera sends as frame `index` at this size."""
+    sc = _synthetic()
+    frame = background(width, height).copy()
+    x, y, cell = code_geometry(width, height)
+    if cell:
+        bits = dict(sc._SYNC)
+        bits.update(zip(sc._DATA_CELLS, sc._code_bits(index)))
+        for (row, col), bit in bits.items():
+            frame[y + row * cell:y + (row + 1) * cell, x + col * cell:x + (col + 1) * cell,
+                  0] = sc._WHITE if bit else sc._BLACK
+    return frame
+
+
+def jpeg_tables():
+    """Return the path of the DQT and DHT segments (libjpeg's, through OpenCV) JPEGs use."""
+    path = cache_dir() / ('jpeg-tables-q%d.bin' % JPEG_QUALITY)
+    if path.exists():
+        return path
+    ok, data = cv2.imencode('.jpg', np.zeros((16, 16, 3), np.uint8),
+                            [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+    data = data.tobytes()
+    segments, pos = b'', 2
+    while pos + 4 <= len(data) and data[pos] == 0xFF and data[pos + 1] != 0xDA:
+        length = struct.unpack_from('>H', data, pos + 2)[0]
+        if data[pos + 1] in (0xDB, 0xC4):
+            segments += data[pos:pos + 2 + length]
+        pos += 2 + length
+    _atomic_write(path, segments)
+    return path
+
+
+def load_model(model):
+    """
+    Return a camera's data file as a dict, with what it implies worked out.
+
+    Each format gets `frames`: [{'width', 'height', 'rates', 'intervals'}], the rates offered
+    at that size (uncompressed formats: those that fit in `usb_bandwidth`, at least the
+    lowest), as V4L2 intervals (1, rate); each control gets its `index` in the shared state.
+    """
+    path = Path(model) if str(model).endswith('.yaml') else CAMERAS / ('%s.yaml' % model)
+    data = yaml.safe_load(path.read_text())
+    data['model'] = path.stem
+    budget = data.get('usb_bandwidth', 24000000)
+    for fmt in data['formats']:
+        compressed = fmt['fourcc'] not in ('YUYV', 'UYVY')
+        fmt['compressed'] = compressed
+        fmt['frames'] = []
+        for width, height in fmt['sizes']:
+            rates = sorted(fmt['rates'], reverse=True)
+            if not compressed:
+                fitting = [r for r in rates if width * height * 2 * r <= budget]
+                rates = fitting or rates[-1:]
+            fmt['frames'].append({'width': width, 'height': height, 'rates': rates,
+                                  'intervals': [(1, r) for r in rates]})
+    if len(data['controls']) > _MAX_CONTROLS:
+        raise ValueError('%s: at most %d controls' % (path, _MAX_CONTROLS))
+    by_name = {c['name']: c for c in data['controls']}
+    for index, control in enumerate(data['controls']):
+        control['index'] = index
+        for master in control.get('inactive_unless', {}):
+            if master not in by_name:
+                raise ValueError('%s: %s depends on unknown control %s'
+                                 % (path, control['name'], master))
+    return data
+
+
+class EmulatedCamera:
+    """
+    One emulated UVC camera: its device paths, its data file, its faults and its state.
+
+    `state_dir` holds its directory (a test's temporary directory); `model` names a data file
+    in uvc_emulator/cameras (or is a path to one); `node` is the N of /dev/videoN. Options:
+    `serial` (by-id name; the data file's by default), `stalled` and `denied` (start with that
+    fault), `corrupt_every` (overrides the data file's broken-JPEG period; 0: never).
+    """
+
+    def __init__(self, state_dir, model='webcam_1080p', node=40, **faults):
+        unknown = set(faults) - set(_FAULTS) - {'serial', 'corrupt_every', 'usb_port'}
+        if unknown:
+            raise TypeError('unknown option(s) %s' % ', '.join(sorted(unknown)))
+        self.model = load_model(model)
+        self.library = build_library()
+        self.dir = Path(tempfile.mkdtemp(prefix='%s-' % self.model['model'], dir=str(state_dir)))
+        m = self.model
+        serial = faults.get('serial', m.get('serial', 'EMU0000'))
+        port = faults.get('usb_port', m.get('usb_port', '1'))
+        product = m['product']
+        self.by_id = '/dev/v4l/by-id/usb-%s_%s_%s-video-index0' % (
+            m['vendor'].replace(' ', '_'), product.replace(' ', '_'), serial)
+        self.by_path = '/dev/v4l/by-path/pci-0000:00:14.0-usb-0:%s:1.0-video-index0' % port
+        self.card = product
+        corrupt = dict(m.get('corrupt_jpeg') or {})
+        if 'corrupt_every' in faults:
+            corrupt['every'] = faults['corrupt_every']
+        self._write_config(serial, port, corrupt)
+        self._init_state(node, faults)
+
+    # -- set-up
+
+    def _write_config(self, serial, port, corrupt):
+        m = self.model
+        lines = ['card %s' % self.card, 'bus_info usb-0000:00:14.0-%s' % port,
+                 'by_id %s' % self.by_id, 'by_path %s' % self.by_path,
+                 'jpeg_tables %s' % jpeg_tables(),
+                 'corrupt_every %d' % int(corrupt.get('every', 0)),
+                 'corrupt_mode %s' % corrupt.get('mode', 'truncate')]
+        for fmt in m['formats']:
+            flags = 1 if fmt['compressed'] else 0
+            lines.append('format %s %d %s' % (fmt['fourcc'], flags, fmt['description']))
+            for frame in fmt['frames']:
+                width, height = frame['width'], frame['height']
+                background(width, height)
+                x, y, cell = code_geometry(width, height)
+                bg = cache_dir() / ('background-%dx%d-%s.yuyv' % (width, height, _picture_key()))
+                lines.append('frame %d %d %d %d %d %d %s' % (
+                    width, height, width * height * 2, x, y, cell, bg))
+                lines += ['interval %d %d' % iv for iv in frame['intervals']]
+        by_name = {c['name']: c for c in m['controls']}
+        for c in m['controls']:
+            master_id, manual = 0, 0
+            for master, value in c.get('inactive_unless', {}).items():
+                master_id, manual = by_name[master]['id'], value
+            flags = _FLAG_READ_ONLY if c.get('read_only') else 0
+            lines.append('control %#x %d %d %d %d %d %d %#x %d %s' % (
+                c['id'], _TYPES[c['type']], c['min'], c['max'], c.get('step', 1), c['default'],
+                flags, master_id, manual, c['label']))
+            for index, name in sorted((c.get('menu') or {}).items()):
+                lines.append('menu %#x %d %s' % (c['id'], index, name))
+        (self.dir / 'camera.conf').write_text('\n'.join(lines) + '\n')
+        (self.dir / 'empty').mkdir()  # listed in place of /dev/v4l/by-id where udev made none
+
+    def _init_state(self, node, faults):
+        path = self.dir / 'state'
+        path.write_bytes(bytes(_STATE_SIZE))
+        self._file = open(path, 'r+b')
+        self._state = mmap.mmap(self._file.fileno(), _STATE_SIZE)
+        self._put('I', _OFF_STALLED, 1 if faults.get('stalled') else 0)
+        self._put('I', _OFF_DENIED, 1 if faults.get('denied') else 0)
+        self._reset(node)
+        self._put('I', 0, _MAGIC)
+
+    def _put(self, kind, offset, value):
+        struct.pack_into(kind, self._state, offset, value)
+
+    def _get(self, kind, offset):
+        return struct.unpack_from(kind, self._state, offset)[0]
+
+    def _reset(self, node):
+        """As a camera powering up: default format and size, default control values."""
+        first = self.model['formats'][0]
+        default = tuple(self.model.get('default_size') or first['sizes'][0])
+        sizes = [tuple(s) for s in first['sizes']]
+        self._put('i', _OFF_NODE, int(node))
+        self._put('Q', _OFF_OWNER, 0)
+        self._put('I', _OFF_FORMAT, 0)
+        self._put('I', _OFF_FRAME, sizes.index(default) if default in sizes else 0)
+        self._put('I', _OFF_INTERVAL, 0)
+        for control in self.model['controls']:
+            self._put('i', _OFF_VALUES + 4 * control['index'], control['default'])
+        self._put('I', _OFF_PLUGGED, 1)
+
+    # -- what a test uses
+
+    @property
+    def node(self):
+        """Return the N of /dev/videoN the camera answers at."""
+        return self._get('i', _OFF_NODE)
+
+    @property
+    def device(self):
+        """Return the device path, e.g. /dev/video40."""
+        return '/dev/video%d' % self.node
+
+    @property
+    def plugged(self):
+        """Return whether the camera is plugged in."""
+        return self._get('I', _OFF_PLUGGED) == 1
+
+    @property
+    def frames_served(self):
+        """Return how many frames went into streaming buffers so far (all processes)."""
+        return self._get('Q', _OFF_SERVED)
+
+    @property
+    def next_index(self):
+        """Return the frame index the sensor gives next (frames without a buffer are lost)."""
+        return self._get('Q', _OFF_SENSOR)
+
+    def env(self, base_env=None):
+        """Return a copy of base_env, os.environ by default, with LD_PRELOAD and this camera."""
+        env = dict(os.environ if base_env is None else base_env)
+        preload = [p for p in env.get('LD_PRELOAD', '').split(':') if p]
+        if str(self.library) not in preload:
+            preload.insert(0, str(self.library))
+        env['LD_PRELOAD'] = ':'.join(preload)
+        cameras = [p for p in env.get(ENV_CAMERAS, '').split(':') if p]
+        if str(self.dir) not in cameras:
+            cameras.append(str(self.dir))
+        env[ENV_CAMERAS] = ':'.join(cameras)
+        return env
+
+    def unplug(self):
+        """Unplug: open descriptors get ENODEV and POLLERR, the paths vanish (ENOENT)."""
+        self._put('I', _OFF_PLUGGED, 0)
+        self._put('I', _OFF_GENERATION, self._get('I', _OFF_GENERATION) + 1)
+        self._put('Q', _OFF_OWNER, 0)
+
+    def replug(self, node=None):
+        """Plug in again, at /dev/video`node` if given; by-id and by-path follow."""
+        if self.plugged:
+            self.unplug()
+        self._reset(self.node if node is None else node)
+
+    def stall(self):
+        """Stall: the camera goes on streaming but sends nothing, no buffer becomes ready."""
+        self._put('I', _OFF_STALLED, 1)
+
+    def resume(self):
+        """End a stall: frames flow again."""
+        self._put('I', _OFF_STALLED, 0)
+
+    def deny(self, denied=True):
+        """Make opening the device fail with EACCES (emulated: for any user, root too)."""
+        self._put('I', _OFF_DENIED, 1 if denied else 0)
+
+    @contextlib.contextmanager
+    def busy(self, timeout=20.0):
+        """Stream from the camera in another process meanwhile (others get EBUSY)."""
+        holder = subprocess.Popen(
+            [sys.executable, str(Path(__file__).resolve()), 'hold', self.device],
+            env=self.env(), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE, text=True)
+        try:
+            line = _read_line(holder.stdout, timeout)
+            if line.strip() != 'streaming':
+                holder.kill()
+                raise RuntimeError('the process holding %s did not stream: %s %s' % (
+                    self.device, line, holder.stderr.read()))
+            yield holder
+        finally:
+            with contextlib.suppress(OSError):
+                holder.stdin.close()
+            try:
+                holder.wait(timeout)
+            except subprocess.TimeoutExpired:
+                holder.kill()
+                holder.wait()
+            holder.stdout.close()
+            holder.stderr.close()
+
+    def control_info(self, name_or_id):
+        """Return a control's entry of the data file, by name, label or V4L2 id."""
+        for control in self.model['controls']:
+            if name_or_id in (control['name'], control['label'], control['id']):
+                return control
+        raise KeyError('%s has no control %r' % (self.model['model'], name_or_id))
+
+    def control(self, name_or_id):
+        """Return the device's current value of this control, as every process sees it."""
+        index = self.control_info(name_or_id)['index']
+        return self._get('i', _OFF_VALUES + 4 * index)
+
+    def close(self):
+        """Unplug the camera and remove its directory."""
+        if self._state is not None:
+            self.unplug()
+            self._state.close()
+            self._file.close()
+            self._state = None
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def _read_line(stream, timeout):
+    import selectors
+    selector = selectors.DefaultSelector()
+    selector.register(stream, selectors.EVENT_READ)
+    ready = selector.select(timeout)
+    selector.close()
+    return stream.readline() if ready else ''
+
+
+def _hold(device):
+    """Stream from a device until stdin closes (the `busy` fault's other process)."""
+    import v4l2_ioctl
+    fd = v4l2_ioctl.open_device(device)
+    stream = v4l2_ioctl.Stream(fd)
+    print('streaming', flush=True)
+    sys.stdin.read()
+    stream.close()
+    os.close(fd)
+
+
+if __name__ == '__main__':
+    if len(sys.argv) == 3 and sys.argv[1] == 'hold':
+        _hold(sys.argv[2])
+    else:
+        sys.exit('usage: emulated_camera.py hold DEVICE')
