@@ -122,6 +122,11 @@ def run(node_class, args=None):
         sys.stdout.write(help_text(node_class.NODE_NAME, node_class.PARAMETERS,
                                    node_class.SUMMARY))
         return 0
+    # A node's own commands (COMMANDS: flag -> function(argv) -> exit status) run instead of
+    # the node, without a ROS graph: usbcam_publisher --list-formats.
+    for flag, command in getattr(node_class, 'COMMANDS', {}).items():
+        if flag in argv[1:]:
+            return command(argv)
     install_quiet_signals()
     # Ctrl-C and SIGTERM wait while rclpy starts and the node is built: rclpy shutting its
     # context down while another thread creates a service or a timer can deadlock. Blocked

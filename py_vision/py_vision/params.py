@@ -54,7 +54,9 @@ class Spec:
     the user sets it (a camera control left at the camera's own value). `value_range` is
     inclusive; `choices` lists the accepted strings; `check` is any further condition, with
     `accepted` saying in words what passes it. A `live` parameter can be changed while the node
-    runs (`ros2 param set`); the others are read-only.
+    runs (`ros2 param set`); the others are read-only. `step` is an integer range's step and
+    `constraints`, when given, the descriptor's additional_constraints (a camera control says
+    what it is there).
     """
 
     name: str
@@ -65,6 +67,8 @@ class Spec:
     check: Optional[Callable[[Any], bool]] = None
     accepted: str = ''
     live: bool = False
+    step: int = 1
+    constraints: str = ''
 
     @property
     def kind(self) -> type:
@@ -103,6 +107,8 @@ class Spec:
         if self.value_range is not None:
             low, high = self.value_range
             good = good and low <= value <= high
+            if kind is int and self.step > 1:
+                good = good and (value - low) % self.step == 0
         if self.choices and value not in self.choices:
             good = False
         if self.check is not None and good:
@@ -126,12 +132,12 @@ class Spec:
         if not self.optional:
             descriptor.type = _TYPES[self.kind].value
         constraints = self.accepts() if (self.accepted or self.choices) else ''
-        descriptor.additional_constraints = constraints
+        descriptor.additional_constraints = self.constraints or constraints
         if self.value_range is not None:
             low, high = self.value_range
             if self.kind is int:
                 descriptor.integer_range = [IntegerRange(
-                    from_value=int(low), to_value=int(high), step=1)]
+                    from_value=int(low), to_value=int(high), step=self.step)]
             elif self.kind is float:
                 descriptor.floating_point_range = [FloatingPointRange(
                     from_value=float(low), to_value=float(high), step=0.0)]
@@ -179,12 +185,14 @@ class Parameters:
         self._declaring = False
         node.add_on_set_parameters_callback(self._on_set)
 
-    def declare(self, spec: Spec, on_change: Optional[Callable[[Any], None]] = None) -> Any:
+    def declare(self, spec: Spec, on_change: Optional[Callable[[Any], Optional[str]]] = None
+                ) -> Any:
         """
         Declare spec's parameter with its real type; return its checked value (None: not set).
 
         A live parameter needs on_change(value), which applies a new value once it has been
-        checked like at start-up. Raises ConfigError when the start-up value is unusable.
+        checked like at start-up and returns None, or why it refused. Raises ConfigError when
+        the start-up value is unusable.
         """
         if spec.live and on_change is None:
             raise ValueError('live parameter %s needs an on_change callback' % spec.name)
@@ -212,6 +220,52 @@ class Parameters:
         finally:
             self._declaring = False
         return value
+
+    def declare_shown(self, spec: Spec,
+                      on_change: Optional[Callable[[Any], Optional[str]]] = None) -> None:
+        """Declare spec's parameter with spec.default, what the node found (a camera's value)."""
+        if spec.live and on_change is None:
+            raise ValueError('live parameter %s needs an on_change callback' % spec.name)
+        self._specs[spec.name] = (spec, on_change)
+        self._declaring = True
+        try:
+            self._node.declare_parameter(spec.name, spec.default, spec.descriptor(),
+                                         ignore_override=True)
+        finally:
+            self._declaring = False
+
+    def given(self, name: str) -> Any:
+        """Return the value the user gave a parameter not declared yet (None: not given)."""
+        node = self._node
+        self._declaring = True
+        try:
+            given = node.declare_parameter(
+                name, None, ParameterDescriptor(dynamic_typing=True)).value
+            node.undeclare_parameter(name)
+        finally:
+            self._declaring = False
+        return None if given in _NOT_SET_WORDS else given
+
+    def show(self, values: Dict[str, Any], specs: Sequence[Spec] = ()) -> None:
+        """
+        Show values the node learned elsewhere (a camera's) without applying them again.
+
+        specs: new descriptors for parameters whose description changed (e.g. a control that
+        became inactive). Read-only parameters keep the value they were declared with.
+        """
+        node = self._node
+        self._declaring = True
+        try:
+            for spec in specs:
+                if node.has_parameter(spec.name) and spec.live:
+                    node.set_descriptor(spec.name, spec.descriptor())
+            changes = [Parameter(name, value=value) for name, value in values.items()
+                       if node.has_parameter(name) and node.get_parameter(name).value != value
+                       and self._specs[name][0].live]
+            if changes:
+                node.set_parameters(changes)
+        finally:
+            self._declaring = False
 
     def _on_set(self, parameters):
         # rclpy itself refuses read-only parameters, wrong types and values out of the range;

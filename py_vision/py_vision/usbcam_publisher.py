@@ -25,13 +25,15 @@ is the camera layer's CaptureLoop (py_vision.capture), which calls publish_image
 frame.
 """
 
+import sys
 import time
 
 import cv2
 from py_vision import dds
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
-from py_vision.capture import (
-    Camera, CaptureLoop, PIXEL_FORMATS, SourceError, SyntheticDevices, USB_CAM_ALIASES)
+from py_vision.capture import Camera, CaptureLoop, PIXEL_FORMATS, SourceError, SyntheticDevices
+from py_vision.capture.listing import device_listing
+from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
 from py_vision.node_main import ConfigError, main_for
 from py_vision.params import Parameters, Spec
@@ -44,32 +46,13 @@ from rclpy.time import Time
 from sensor_msgs.msg import CameraInfo
 from sensor_msgs.srv import SetCameraInfo
 from std_msgs.msg import Header
+import yaml
 
 IMAGE_TOPIC = 'usb_camera/image'
 
 
-def _control(name, kind, description, value_range=None):
-    # Not set unless the user sets it: the camera keeps its own value. The range here is what
-    # any UVC camera could accept; the camera's own range is checked when the value is applied.
-    return Spec(name, kind, description + " (not set: the camera's own value)", value_range,
-                live=True)
-
-
-_CONTROL_SPECS = (
-    _control('brightness', int, 'camera brightness', (-255, 255)),
-    _control('contrast', int, 'camera contrast', (0, 255)),
-    _control('saturation', int, 'camera colour saturation', (0, 255)),
-    _control('sharpness', int, 'camera sharpness', (0, 255)),
-    _control('gain', int, 'camera gain', (0, 255)),
-    _control('auto_white_balance', bool, 'automatic white balance'),
-    _control('white_balance', int, 'white balance temperature in kelvin, with '
-             'auto_white_balance off', (1000, 10000)),
-    _control('autoexposure', bool, 'automatic exposure'),
-    _control('exposure', int, 'exposure time in 100 us units, with autoexposure off',
-             (1, 10000)),
-    _control('autofocus', bool, 'automatic focus'),
-    _control('focus', int, 'focus position, with autofocus off', (0, 1023)),
-)
+# How often the control parameters are brought up to date with the device's values.
+CONTROL_SYNC_PERIOD_S = 0.5
 
 
 class USBImagePublisher(Node):
@@ -77,8 +60,10 @@ class USBImagePublisher(Node):
     PUBLISHES = dds.OWN_SIZE
     SUMMARY = ('Publishes a USB camera (or a video file, or the built-in synthetic camera) as '
                'sensor_msgs/Image on usb_camera/image, JPEG on usb_camera/image/compressed '
-               'and CameraInfo on usb_camera/camera_info.')
-    PARAMETERS = (
+               'and CameraInfo on usb_camera/camera_info. Every control the camera reports is '
+               "a parameter too, with the camera's range (ros2 param describe); "
+               '--list-formats prints what the camera offers and exits.')
+    OWN_PARAMETERS = (
         Spec('video_device', '/dev/video0',
              'V4L2 device path, OpenCV camera index, video file, or "synthetic[?options]"',
              check=bool, accepted='a device path, an index, a file or synthetic'),
@@ -98,10 +83,12 @@ class USBImagePublisher(Node):
              'package://pkg/path.yaml; empty: ~/.ros/camera_info/${NAME}.yaml if it exists'),
         Spec('reliability', 'reliable', 'publisher QoS reliability', choices=tuple(RELIABILITY)),
         Spec('depth', 10, 'publisher QoS queue depth', (1, 1000)),
-    ) + _CONTROL_SPECS
+    )
+    # --help lists usb_cam's control names too; the camera's own are declared once it is open.
+    PARAMETERS = OWN_PARAMETERS + ALIAS_HELP
 
     # What close() finds when start-up was interrupted before these were made.
-    capture = None
+    capture = controls = None
     _log_name = NODE_NAME
     raw_published = compressed_published = frames_decoded = 0
 
@@ -116,9 +103,8 @@ class USBImagePublisher(Node):
         cv2.setNumThreads(1)
         params = Parameters(self)
         live = {'jpeg_quality': self._set_jpeg_quality, 'frame_id': self._set_frame_id}
-        live.update({name: self._control_setter(name) for name in USB_CAM_ALIASES})
         values = {spec.name: params.declare(spec, live.get(spec.name))
-                  for spec in self.PARAMETERS}
+                  for spec in self.OWN_PARAMETERS}
         self.video_device = values['video_device']
         self.size = (values['image_width'], values['image_height'])
         self.framerate = values['framerate']
@@ -134,13 +120,14 @@ class USBImagePublisher(Node):
         self.failed = False
         self.capture = CaptureLoop(self._open_camera, self.publish_image, self.get_logger(),
                                    name=self.video_device, on_failure=self._capture_failed)
-        for name in USB_CAM_ALIASES:
-            if values[name] is not None:
-                self.capture.set_control(name, values[name])
         try:
             self.capture.open()
         except SourceError as error:
             raise ConfigError(str(error))
+        self.controls = ControlParameters(params, self.capture.set_control,
+                                          self.capture.controls, self.get_logger())
+        self.controls.declare(set(values))
+        self.create_timer(CONTROL_SYNC_PERIOD_S, self.controls.sync)
         self.calibration = CameraInfoManager(
             values['camera_name'], values['camera_info_url'], self.get_logger())
         self.calibration.load()
@@ -155,13 +142,6 @@ class USBImagePublisher(Node):
 
     def _set_jpeg_quality(self, quality):
         self.images.jpeg_quality = quality
-
-    def _control_setter(self, name):
-        def apply(value):
-            if self.capture is None:  # declared before the camera opens: applied at open
-                return None
-            return self.capture.set_control(name, value)
-        return apply
 
     # --- calibration -----------------------------------------------------------------
 
@@ -178,11 +158,8 @@ class USBImagePublisher(Node):
         """Open the camera the parameters name (called by the capture loop at each (re)open)."""
         camera = Camera.open(self.video_device, self.size[0], self.size[1], self.framerate,
                              self.pixel_format, synthetic=self._synthetic)
-        note = ''
-        if (camera.width, camera.height) != self.size:
-            note = ' (requested %dx%d; publishing what the device gives)' % self.size
-        self.get_logger().info('opened %s: %s%s, publishing on %s' % (
-            self.video_device, camera.describe(), note, self.images.raw.topic_name))
+        self.get_logger().info('opened %s: %s, publishing on %s' % (
+            self.video_device, camera.describe(), self.images.raw.topic_name))
         for line in camera.notes:
             self.get_logger().warning(line)
         return camera
@@ -240,6 +217,38 @@ class USBImagePublisher(Node):
             logger.info('camera released before capturing began')
 
 
+def video_device_of(argv):
+    """Return the video_device a command line gives (-p, --param, --params-file), or default."""
+    device = USBImagePublisher.OWN_PARAMETERS[0].default
+    words = list(argv[1:])
+    for flag, word in zip(words, words[1:]):
+        if flag in ('-p', '--param') and word.startswith('video_device:='):
+            device = word.split(':=', 1)[1].strip('\'"')
+        elif flag == '--params-file':
+            try:
+                with open(word) as stream:
+                    content = yaml.safe_load(stream) or {}
+            except (OSError, yaml.YAMLError):
+                continue  # the node itself says what is wrong with the file
+            for section in (content.get('/**'), content.get(USBImagePublisher.NODE_NAME)):
+                value = ((section or {}).get('ros__parameters') or {}).get('video_device')
+                if value is not None:
+                    device = str(value)
+    return device
+
+
+def list_formats(argv):
+    """Print what the camera offers (--list-formats); return the exit status."""
+    device = video_device_of(argv)
+    try:
+        sys.stdout.write(device_listing(device))
+    except SourceError as error:
+        sys.stderr.write('%s: %s\n' % (USBImagePublisher.NODE_NAME, error))
+        return 1
+    return 0
+
+
+USBImagePublisher.COMMANDS = {'--list-formats': list_formats}
 main = main_for(USBImagePublisher)
 
 

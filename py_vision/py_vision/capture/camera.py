@@ -28,12 +28,12 @@ reports before they reach it.
 import os
 import stat
 import sys
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 
 import cv2
 import numpy as np
 from py_vision.capture.controls import ControlInfo, OWNED_BY, USB_CAM_ALIASES
-from py_vision.capture.opencv_log import silence_opencv
+from py_vision.capture.opencv_env import prepare_opencv
 from py_vision.capture.source import (
     Clock, Frame, FrameFormat, FrameSource, MONOTONIC, SourceError)
 from py_vision.capture.synthetic_device import is_synthetic_spec, SyntheticDevices
@@ -43,8 +43,8 @@ from py_vision.capture.video_file import VideoFileSource
 __all__ = ['Camera', 'open_source', 'PIXEL_FORMATS']
 
 PIXEL_FORMATS = ('auto', 'mjpeg', 'yuyv')
-_FOURCCS = {'yuyv': float(cv2.VideoWriter_fourcc(*'YUYV')),
-            'mjpeg': float(cv2.VideoWriter_fourcc(*'MJPG'))}
+_V4L2_NAMES = {'yuyv': 'YUYV', 'mjpeg': 'MJPG'}
+_FOURCCS = {name: float(cv2.VideoWriter_fourcc(*code)) for name, code in _V4L2_NAMES.items()}
 _FORMAT_NAMES = {value: name for name, value in _FOURCCS.items()}
 # Rates within this fraction of the request count as reached (drivers report 29.97 for 30).
 _RATE_TOLERANCE = 0.02
@@ -84,7 +84,7 @@ def open_source(video_device, width, height, fps, *, synthetic: Optional[Synthet
     Cameras are asked for width, height and fps; read the size they really give with get().
     Raises SourceError (one line naming the device and the reason) when it does not open.
     """
-    silence_opencv()
+    prepare_opencv(fps)
     device = str(video_device)
     if is_synthetic_spec(device):
         devices = synthetic if synthetic is not None else SyntheticDevices(clock)
@@ -128,25 +128,45 @@ def open_source(video_device, width, height, fps, *, synthetic: Optional[Synthet
 
 
 def _is_jpeg(data: np.ndarray) -> bool:
-    """Return True when data is shaped like a whole JPEG: SOI, a marker, ..., EOI."""
-    if data.size < 8 or data[0] != 0xFF or data[1] != 0xD8 or data[2] != 0xFF:
+    """
+    Return True when data is shaped like a whole JPEG, without decoding it.
+
+    SOI, then marker segments whose lengths chain up to the start of scan, and EOI at the end
+    (a UVC payload may be padded after it): a transfer cut short, a header overwritten with
+    noise or a missing end fail here. Damage inside the scan itself shows when it is decoded.
+    """
+    size = data.size
+    if size < 8 or data[0] != 0xFF or data[1] != 0xD8:
         return False
-    # A UVC payload may be padded after the EOI marker.
-    end = data.size
+    end = size
     while end > 2 and data[end - 1] == 0:
         end -= 1
-    return data[end - 2] == 0xFF and data[end - 1] == 0xD9
+    if data[end - 2] != 0xFF or data[end - 1] != 0xD9:
+        return False
+    position = 2
+    for _ in range(64):   # a JPEG header has a dozen segments or so
+        if position + 4 > end or data[position] != 0xFF:
+            return False
+        marker = data[position + 1]
+        if marker == 0xDA:    # start of scan: the header holds together
+            return True
+        if marker == 0xFF:    # fill byte
+            position += 1
+            continue
+        position += 2 + ((int(data[position + 2]) << 8) | int(data[position + 3]))
+    return False
 
 
 class Camera:
     """An opened camera, video file or synthetic camera, with what it really gives."""
 
     def __init__(self, source: FrameSource, device: str, pixel_format: str,
-                 notes: List[str]):
+                 notes: List[str], requested: Tuple[int, int, float] = (0, 0, 0.0)):
         self.source = source
         self.device = device
         self.pixel_format = pixel_format   # 'yuyv', 'mjpeg', or 'file'
         self.notes = notes                 # requests the camera did not grant, in words
+        self.requested = requested         # width, height and rate asked for
         self.width = int(source.get(cv2.CAP_PROP_FRAME_WIDTH))
         self.height = int(source.get(cv2.CAP_PROP_FRAME_HEIGHT))
         self.fps = float(source.get(cv2.CAP_PROP_FPS))
@@ -160,19 +180,29 @@ class Camera:
             raise ValueError('pixel_format must be one of %s' % ', '.join(PIXEL_FORMATS))
         source = open_source(device, width, height, fps, synthetic=synthetic, clock=clock)
         notes = []
+        requested = (width, height, fps)
         if isinstance(source, VideoFileSource):
-            return cls(source, device, 'file', notes)
+            return cls(source, device, 'file', notes, requested)
         try:
             chosen = _negotiate(source, device, width, height, fps, pixel_format, notes)
         except Exception:
             source.release()
             raise
-        return cls(source, device, chosen, notes)
+        return cls(source, device, chosen, notes, requested)
 
     def describe(self) -> str:
-        """Return what the camera gives, for the log line on opening."""
+        """Return what the camera gives, and what was asked when it differs, in one line."""
         what = {'yuyv': 'YUYV', 'mjpeg': 'MJPEG', 'file': 'video file'}[self.pixel_format]
-        return '%dx%d %s at %.4g fps' % (self.width, self.height, what, self.fps)
+        line = '%dx%d %s at %.4g fps' % (self.width, self.height, what, self.fps)
+        width, height, fps = self.requested
+        if self.pixel_format == 'file':
+            if width and (self.width, self.height) != (width, height):
+                line += " (the file's own size; %dx%d requested)" % (width, height)
+        elif (self.width, self.height) != (width, height) or \
+                abs(self.fps - fps) > fps * _RATE_TOLERANCE:
+            line += ' (%dx%d at %.4g fps requested: the nearest the camera offers)' % (
+                width, height, fps)
+        return line
 
     def read(self) -> Optional[Frame]:
         """
@@ -253,8 +283,16 @@ class Camera:
         self.source.release()
 
 
-def _try_format(source, name, width, height, fps):
-    """Ask for a pixel format at a size and rate; return (format name or None, rate obtained)."""
+def _try_format(source, offered, name, width, height, fps):
+    """
+    Ask for a pixel format at a size and rate; return (format name or None, rate obtained).
+
+    The size and rate asked for are the nearest the device lists for that format (`offered`,
+    by V4L2 FOURCC), so what the driver gives is what the device's enumeration says.
+    """
+    listed = offered.get(_V4L2_NAMES[name])
+    if listed is not None:
+        width, height, fps = listed.nearest(width, height, fps)
     source.set(cv2.CAP_PROP_FOURCC, _FOURCCS[name])
     # The camera keeps its JPEG bytes only with OpenCV's conversion off.
     source.set(cv2.CAP_PROP_CONVERT_RGB, 0 if name == 'mjpeg' else 1)
@@ -269,13 +307,14 @@ def _try_format(source, name, width, height, fps):
 
 def _negotiate(source, device, width, height, fps, pixel_format, notes):
     """Choose the pixel format; return its name and add what was not granted to notes."""
+    offered = {listed.fourcc: listed for listed in source.formats()}
     wanted = ('yuyv', 'mjpeg') if pixel_format == 'auto' else (pixel_format,)
-    got, rate = _try_format(source, wanted[0], width, height, fps)
+    got, rate = _try_format(source, offered, wanted[0], width, height, fps)
     if pixel_format == 'auto' and (got != 'yuyv' or rate < fps * (1 - _RATE_TOLERANCE)):
         yuyv_rate = rate if got == 'yuyv' else 0.0
-        got, rate = _try_format(source, 'mjpeg', width, height, fps)
+        got, rate = _try_format(source, offered, 'mjpeg', width, height, fps)
         if got != 'mjpeg' or rate <= yuyv_rate:
-            got, rate = _try_format(source, 'yuyv', width, height, fps)
+            got, rate = _try_format(source, offered, 'yuyv', width, height, fps)
     if got is None:
         raise SourceError('cannot open video_device "%s": it sends neither YUYV nor MJPEG'
                           % device)

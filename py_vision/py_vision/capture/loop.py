@@ -30,8 +30,9 @@ interface that maps onto a lifecycle node:
 A device that fails (reads fail, or no frame for `stall_periods` frame periods: a stall) is
 lost: it is released and reopened with back-off, and the controls set through the loop are
 applied again. Frames captured before the loop (re)started reading are stale and dropped, and
-a corrupt frame is counted and dropped: on_frame sees only new, whole frames. `stats()` gives
-the counters diagnostics report.
+a corrupt frame is counted and dropped: on_frame sees only new frames whose JPEG holds
+together, and a frame found corrupt while on_frame decodes it (`Frame.bgr()` None) is counted
+too (on_frame publishes no part of it). `stats()` gives the counters diagnostics report.
 """
 
 from dataclasses import dataclass, replace
@@ -170,6 +171,12 @@ class CaptureLoop:
                 reason = camera.set_control(name, value)
                 if reason:
                     return reason
+                # The newest value of a control wins, whichever name it was set by.
+                cid = camera.control(name).cid
+                for other in list(self._wanted):
+                    control = camera.control(other)
+                    if control is not None and control.cid == cid:
+                        del self._wanted[other]
             self._wanted[name] = value
         return None
 
@@ -259,15 +266,21 @@ class CaptureLoop:
                 self._update(stale=self._stats.stale + 1)
                 continue
             if frame.corrupt:
-                self._update(corrupt=self._stats.corrupt + 1)
-                if self._stats.corrupt == 1 or self._stats.corrupt % 100 == 0:
-                    self._log.warning('%s sent a corrupt frame (%d so far); skipped' % (
-                        self._name, self._stats.corrupt))
+                self._count_corrupt()
                 continue
             last_frame, first = now, False
             self._measure(now)
             self._on_frame(camera, frame)
+            if frame.corrupt:  # found out while decoding it: on_frame published nothing
+                self._count_corrupt()
+                continue
             self._update(frames=self._stats.frames + 1)
+
+    def _count_corrupt(self) -> None:
+        self._update(corrupt=self._stats.corrupt + 1)
+        if self._stats.corrupt == 1 or self._stats.corrupt % 100 == 0:
+            self._log.warning('%s sent a corrupt frame (%d so far); skipped, never published'
+                              % (self._name, self._stats.corrupt))
 
     def _measure(self, now) -> None:
         window = self._rate_window

@@ -68,11 +68,52 @@ class FrameSize:
 
 @dataclass(frozen=True)
 class FrameFormat:
-    """One pixel format a device offers: 'YUYV' or 'MJPG', its description and sizes."""
+    """
+    One pixel format a device offers: 'YUYV' or 'MJPG', its description and sizes.
+
+    Most cameras offer discrete sizes and rates (`sizes`). One that scales offers any size
+    within `size_range` (min width, min height, max width, max height) and one with a stepwise
+    frame interval any rate within `rate_range` (lowest, highest); `sizes` then lists common
+    sizes within them.
+    """
 
     fourcc: str
     description: str
     sizes: Tuple[FrameSize, ...]
+    size_range: Optional[Tuple[int, int, int, int]] = None
+    rate_range: Optional[Tuple[float, float]] = None
+
+    def nearest(self, width: int, height: int, fps: float) -> Tuple[int, int, float]:
+        """
+        Return the size and rate this format offers nearest to a request.
+
+        The nearest size is the one with the least area outside their overlap (uvcvideo's
+        measure); the nearest rate is the closest the size offers (the higher on a tie).
+        """
+        size_range, sizes = self.size_range, self.sizes
+        if size_range and size_range[0] <= width <= size_range[2] \
+                and size_range[1] <= height <= size_range[3]:
+            chosen = (width, height)
+        elif sizes:
+            best = min(sizes, key=lambda s: _outside_overlap(s.width, s.height, width, height))
+            chosen = (best.width, best.height)
+        else:
+            chosen = (width, height)
+        if self.rate_range and self.rate_range[0] <= fps <= self.rate_range[1]:
+            return chosen[0], chosen[1], fps
+        near = min(sizes, key=lambda s: _outside_overlap(s.width, s.height, *chosen),
+                   default=None)
+        rates = list(near.rates) if near is not None else []
+        if self.rate_range:
+            rates += list(self.rate_range)
+        if not rates:
+            return chosen[0], chosen[1], fps
+        return chosen[0], chosen[1], min(rates, key=lambda rate: (abs(rate - fps), -rate))
+
+
+def _outside_overlap(width, height, other_width, other_height):
+    overlap = min(width, other_width) * min(height, other_height)
+    return width * height + other_width * other_height - 2 * overlap
 
 
 @dataclass

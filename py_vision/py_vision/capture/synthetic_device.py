@@ -348,7 +348,10 @@ class SyntheticCamera:
             for width, height in LISTED_SIZES:
                 top = yuyv_max_fps(width, height) if name == 'yuyv' else UVC_RATES[0]
                 sizes.append(FrameSize(width, height, tuple(r for r in UVC_RATES if r <= top)))
-            found.append(FrameFormat(*_FORMAT_INFO[name], tuple(sizes)))
+            # A scaler: any size; MJPEG at any rate, YUYV at the rates the bus carries.
+            found.append(FrameFormat(*_FORMAT_INFO[name], tuple(sizes),
+                                     (2, 1, MAX_SIZE, MAX_SIZE),
+                                     (0.1, MAX_FPS) if name == 'mjpeg' else None))
         return found
 
     def controls(self) -> List[ControlInfo]:

@@ -186,11 +186,22 @@ class V4L2Device:
             except OSError:
                 break
             _, _, _, description, pixelformat, _ = _FMTDESC.unpack(buffer)
-            found.append(FrameFormat(fourcc_text(pixelformat), _text(description),
-                                     tuple(self._sizes(pixelformat))))
+            found.append(self._format(fourcc_text(pixelformat), _text(description),
+                                      pixelformat))
         return found
 
+    def _format(self, fourcc, description, pixelformat):
+        listed, size_range = self._sizes(pixelformat)
+        sizes, rate_range = [], None
+        for width, height in listed:
+            rates, stepwise = self._rates(pixelformat, width, height)
+            sizes.append(FrameSize(width, height, tuple(rates)))
+            if stepwise and rates:
+                rate_range = (rates[-1], rates[0])
+        return FrameFormat(fourcc, description, tuple(sizes), size_range, rate_range)
+
     def _sizes(self, pixelformat):
+        """Return the discrete sizes, and the range of a stepwise or continuous one."""
         sizes = []
         for index in range(256):
             buffer = bytearray(_FRMSIZE.pack(index, pixelformat, 0, 0, 0, 0, 0, 0, 0))
@@ -203,14 +214,15 @@ class V4L2Device:
                 sizes.append((values[0], values[1]))
                 continue
             low_w, high_w, step_w, low_h, high_h, step_h = values
-            sizes += [(w, h) for w, h in _COMMON_SIZES
+            common = [(w, h) for w, h in _COMMON_SIZES
                       if low_w <= w <= high_w and low_h <= h <= high_h
                       and (w - low_w) % max(step_w, 1) == 0
                       and (h - low_h) % max(step_h, 1) == 0]
-            break
-        return [FrameSize(w, h, tuple(self._rates(pixelformat, w, h))) for w, h in sizes]
+            return common, (low_w, low_h, high_w, high_h)
+        return sizes, None
 
     def _rates(self, pixelformat, width, height):
+        """Return the rates a size offers, highest first, and whether they are a range."""
         rates = []
         for index in range(64):
             buffer = bytearray(_FRMIVAL.pack(index, pixelformat, width, height, 0,
@@ -224,14 +236,10 @@ class V4L2Device:
                 if num and den:
                     rates.append(den / num)
                 continue
-            # A range of intervals: its fastest and slowest rates bound what can be asked.
-            max_num, max_den = stepwise[0], stepwise[1]
-            if num and den:
-                rates.append(den / num)
-            if max_num and max_den:
-                rates.append(max_den / max_num)
-            break
-        return sorted(set(rates), reverse=True)
+            # A range of intervals: the shortest and longest bound the rates.
+            bounds = [den / num for num, den in ((num, den), stepwise[:2]) if num and den]
+            return sorted(set(bounds), reverse=True), True
+        return sorted(set(rates), reverse=True), False
 
     # --- controls -------------------------------------------------------------------
 

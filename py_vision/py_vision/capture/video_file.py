@@ -21,7 +21,7 @@ from typing import List, Optional
 import cv2
 import numpy as np
 from py_vision.capture.controls import ControlInfo
-from py_vision.capture.opencv_log import silence_opencv
+from py_vision.capture.opencv_env import prepare_opencv
 from py_vision.capture.pacing import FramePacer
 from py_vision.capture.source import Clock, FrameFormat, MONOTONIC
 
@@ -71,7 +71,7 @@ class VideoFileSource:
             self._cap = None
         if not os.path.isfile(self.path):
             return None
-        silence_opencv()
+        prepare_opencv()
         cap = cv2.VideoCapture(self.path)
         ok, frame = cap.read() if cap.isOpened() else (False, None)
         if not ok or frame is None:

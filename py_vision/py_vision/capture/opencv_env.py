@@ -14,25 +14,30 @@
 
 
 """
-OpenCV's own log lines, kept off the console for the life of the process.
+OpenCV as the camera layer needs it: quiet, and quick to give up on a camera that sends nothing.
 
 OpenCV's V4L2 backend prints warnings of its own (``[ WARN:0@7.4] global cap_v4l.cpp:804
-requestBuffers ... errno=19`` at an unplug) on stderr. py_vision says what happened in its own
-words instead, so the camera layer silences OpenCV once, before its first capture opens.
+requestBuffers ... errno=19`` at an unplug) on stderr: py_vision says what happened in its own
+words instead, so OpenCV is silenced for the life of the process before the first capture
+opens. The backend also waits up to 10 s (its default select() timeout) for a frame of a camera
+that stalled; it reads OPENCV_VIDEOIO_V4L_SELECT_TIMEOUT once, at its first wait, so the
+timeout is set here, before then, to a few frame periods.
 """
 
+import math
 import os
 
 import cv2
 
-__all__ = ['silence_opencv']
+__all__ = ['prepare_opencv']
 
 
-def silence_opencv() -> None:
-    """Set OpenCV's log level to silent for this process (idempotent)."""
-    # Child processes and OpenCV code that reads the environment late see it too.
+def prepare_opencv(fps: float = 30.0) -> None:
+    """Silence OpenCV's log and bound its V4L2 read wait for a camera at fps (idempotent)."""
     os.environ.setdefault('OPENCV_LOG_LEVEL', 'SILENT')
-    os.environ.setdefault('OPENCV_VIDEOIO_DEBUG', '0')
+    # Whole seconds: at least 1, and at least three frame periods of a slow camera.
+    seconds = max(1, math.ceil(3.0 / fps)) if fps > 0 else 10
+    os.environ.setdefault('OPENCV_VIDEOIO_V4L_SELECT_TIMEOUT', str(seconds))
     # OpenCV 4.5+ and 5.x: cv2.utils.logging; some 4.x builds only have cv2.setLogLevel.
     logging = getattr(getattr(cv2, 'utils', None), 'logging', None)
     set_level = getattr(logging, 'setLogLevel', None) or getattr(cv2, 'setLogLevel', None)
