@@ -85,8 +85,8 @@ def alias_spec(alias: Alias, control: ControlInfo) -> Spec:
 
 # For --help, before any camera is open: usb_cam's names, not set unless given.
 ALIAS_HELP: Tuple[Spec, ...] = tuple(
-    Spec(alias.name, bool if alias.switch else int,
-         "%s (usb_cam's name; the camera's own range)" % alias.description, live=True)
+    Spec(alias.name, bool if alias.switch else int, "%s (usb_cam's name)" % alias.description,
+         accepted='true or false' if alias.switch else "the camera's own range", live=True)
     for alias in USB_CAM_ALIASES.values())
 
 

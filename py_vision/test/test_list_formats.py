@@ -13,7 +13,6 @@
 # limitations under the License.
 
 
-
 """
 `usbcam_publisher --list-formats`: what a camera offers, printed without a ROS graph.
 
@@ -59,8 +58,8 @@ def test_every_format_size_and_rate_the_camera_offers_is_listed(
     camera = emulated_camera(model=model)
     status, out = list_formats(launch, camera.env(ros_env), camera.by_id)
     assert status == 0, out
-    expected = {fmt['fourcc']: {(frame['width'], frame['height']): [float(r) for r in
-                                                                   frame['rates']]
+    expected = {fmt['fourcc']: {(frame['width'], frame['height']):
+                                [float(rate) for rate in frame['rates']]
                                 for frame in fmt['frames']}
                 for fmt in camera.model['formats']}
     assert offered(out) == expected
