@@ -26,9 +26,9 @@ parameter without its line in the file fails here, naming it.
 import re
 import time
 
-import pytest
 from param_client import describe_parameters
 from py_vision.capture import USB_CAM_ALIASES
+import pytest
 from rclpy.parameter import parameter_value_to_python
 from rclpy.parameter_client import AsyncParameterClient
 from ros_harness import EXECUTABLES, SHARE, wait_until

@@ -25,8 +25,8 @@ docs/emulated_cameras.md's; the faults are injected from here.
 """
 
 import json
-import re
 import os
+import re
 import subprocess
 import sys
 import time
@@ -52,7 +52,7 @@ def own_words_only(node):
     """Assert that every line the node printed is its own log line (no raw OpenCV line)."""
     raw = [line for line in node.output().splitlines()
            if line.strip() and not line.startswith(LOG_LINE)]
-    assert not raw, 'lines that are not the node\'s own:\n%s' % '\n'.join(raw)
+    assert not raw, "lines that are not the node's own:\n%s" % '\n'.join(raw)
 
 
 def image_of(msg):
@@ -206,7 +206,7 @@ def test_a_camera_that_cannot_be_used_is_one_line_and_status_1(
 AGREEMENT = [(640, 480, 30.0, 'auto'), (1280, 720, 30.0, 'auto'), (1920, 1080, 15.0, 'auto'),
              (1280, 720, 30.0, 'yuyv'), (1920, 1080, 30.0, 'yuyv'), (800, 600, 30.0, 'yuyv'),
              (320, 240, 25.0, 'mjpeg'), (1280, 720, 10.0, 'auto'), (160, 120, 5.0, 'auto')]
-NEGOTIATE = '''
+NEGOTIATE = """
 import json, sys
 from py_vision.capture import Camera
 for width, height, fps, fmt in json.loads(sys.argv[2]):
@@ -214,7 +214,7 @@ for width, height, fps, fmt in json.loads(sys.argv[2]):
     print(json.dumps([camera.pixel_format, camera.width, camera.height, camera.fps,
                       camera.notes]))
     camera.release()
-'''
+"""
 
 
 def negotiated(camera):
