@@ -41,6 +41,7 @@ from typing import Callable, Dict, List, Optional, Sequence
 
 from py_vision.capture.camera import Camera
 from py_vision.capture.controls import ControlInfo, OWNED_BY
+from py_vision.capture.frame_memory import keep_frame_buffers
 from py_vision.capture.source import Clock, Frame, MONOTONIC, SourceError
 
 __all__ = ['CaptureLoop', 'CaptureStats', 'LoopTiming']
@@ -103,9 +104,11 @@ class CaptureLoop:
         self._wanted: Dict[str, object] = {}
         self._thread: Optional[threading.Thread] = None
         self._stop = threading.Event()
+        # Counted per frame in plain attributes; stats() makes the snapshot.
         self._stats = CaptureStats()
+        self._frames = self._stale = self._corrupt = 0
         self._not_before = 0.0
-        self._rate_window: List[float] = []
+        self._rate_start, self._rate_frames, self._rate = 0.0, 0, 0.0
 
     # --- the interface the node uses ---------------------------------------------------
 
@@ -197,7 +200,8 @@ class CaptureLoop:
 
     def stats(self) -> CaptureStats:
         """Return the counters so far (a snapshot)."""
-        return self._stats
+        return replace(self._stats, frames=self._frames, stale=self._stale,
+                       corrupt=self._corrupt, measured_fps=self._rate)
 
     @property
     def running(self) -> bool:
@@ -221,6 +225,7 @@ class CaptureLoop:
             reason = camera.set_control(name, value)
             if reason:
                 self._log.warning("%s; left at the camera's own value" % reason)
+        keep_frame_buffers(camera.width, camera.height)
         self._update(present=True, pixel_format=camera.pixel_format, width=camera.width,
                      height=camera.height, fps=camera.fps)
 
@@ -263,7 +268,7 @@ class CaptureLoop:
                 continue
             failed_reads = 0
             if frame.capture_time is not None and frame.capture_time < self._not_before:
-                self._update(stale=self._stats.stale + 1)
+                self._stale += 1
                 continue
             if frame.corrupt:
                 self._count_corrupt()
@@ -274,21 +279,22 @@ class CaptureLoop:
             if frame.corrupt:  # found out while decoding it: on_frame published nothing
                 self._count_corrupt()
                 continue
-            self._update(frames=self._stats.frames + 1)
+            self._frames += 1
 
     def _count_corrupt(self) -> None:
-        self._update(corrupt=self._stats.corrupt + 1)
-        if self._stats.corrupt == 1 or self._stats.corrupt % 100 == 0:
+        self._corrupt += 1
+        if self._corrupt == 1 or self._corrupt % 100 == 0:
             self._log.warning('%s sent a corrupt frame (%d so far); skipped, never published'
-                              % (self._name, self._stats.corrupt))
+                              % (self._name, self._corrupt))
 
     def _measure(self, now) -> None:
-        window = self._rate_window
-        window.append(now)
-        while window and now - window[0] > 1.0:
-            window.pop(0)
-        if len(window) >= 2:
-            self._update(measured_fps=(len(window) - 1) / (window[-1] - window[0]))
+        """Count frames over windows of about a second: the rate they arrive at."""
+        self._rate_frames += 1
+        elapsed = now - self._rate_start
+        if elapsed >= 1.0:
+            if self._rate_start:
+                self._rate = (self._rate_frames - 1) / elapsed
+            self._rate_start, self._rate_frames = now, 1
 
     def _lose(self, camera, failed_reads, stalled_s) -> None:
         if stalled_s is not None:
@@ -300,9 +306,9 @@ class CaptureLoop:
         with self._lock:
             self._set_camera(None)
         camera.release()
-        self._update(lost=self._stats.lost + 1, measured_fps=0.0,
+        self._update(lost=self._stats.lost + 1,
                      stalls=self._stats.stalls + (stalled_s is not None))
-        self._rate_window.clear()
+        self._rate_start, self._rate_frames, self._rate = 0.0, 0, 0.0
 
     def _reopen(self) -> bool:
         """Try to reopen the device with back-off until it is back or the loop stops."""
