@@ -13,11 +13,10 @@
 # limitations under the License.
 
 
-
 """
 Benchmark the capture: CPU per frame of py_vision's capture against a bare OpenCV read loop.
 
-Run from the repository root: ``.venv/bin/python bench/bench_capture.py`` (about 5 minutes;
+Run from the repository root: ``.venv/bin/python bench/bench_capture.py`` (about 9 minutes;
 ``--quick``: one run of each). Both read the same emulated USB camera (the tests' emulated
 webcam, docs/emulated_cameras.md: OpenCV's real V4L2 backend streams it) at 640x480, 1280x720
 and 1920x1080, in YUYV and in MJPEG, each run in a process of its own:
@@ -36,8 +35,9 @@ capture without ``bgr()``.
 The cost is the CPU time of the thread that reads the frames (OpenCV's read and conversion,
 the system calls, py_vision's own work; not the emulated camera's thread that makes the
 frames, which is the device's) per frame after the first 10, at the camera's own rate. The
-runs alternate bare and py_vision; medians of 3. Prints a Markdown table and writes
-bench/results/capture.json.
+runs alternate bare and py_vision, 5 of each: the table gives the medians, and the median of
+the ratios of each py_vision run to the bare run just before it. Prints a Markdown table and
+writes bench/results/capture.json.
 """
 
 import argparse
@@ -66,9 +66,9 @@ CASES = [(640, 480, 'yuyv', 30.0, 'BGR'), (1280, 720, 'yuyv', 10.0, 'BGR'),
 WARMUP = 10
 SECONDS = 4.0        # of measured reading at 30 fps; more frames' worth at lower rates
 MIN_FRAMES = 40
-RUNS = 3
+RUNS = 5
 
-WORKER = r'''
+WORKER = r"""
 import json, sys, threading, time
 import cv2
 cv2.setNumThreads(1)   # as usbcam_publisher runs it
@@ -125,7 +125,7 @@ else:
 count = len(marks) - WARMUP
 print(json.dumps({'frames': count, 'cpu_ms_per_frame': 1e3 * (c1 - c0) / count,
                   'fps': count / (t1 - t0)}))
-''' % WARMUP
+""" % WARMUP
 
 
 def run(camera, env, width, height, fmt, fps, output, mode):
@@ -156,9 +156,14 @@ def main():
                         run(camera, env, width, height, fmt, fps, output, mode))
             bare = statistics.median(r['cpu_ms_per_frame'] for r in results['bare'])
             ours = statistics.median(r['cpu_ms_per_frame'] for r in results['py_vision'])
+            # Each py_vision run against the bare run just before it: the machine's load
+            # drifts less between the two than over the whole benchmark.
+            ratio = statistics.median(
+                ours_run['cpu_ms_per_frame'] / bare_run['cpu_ms_per_frame']
+                for bare_run, ours_run in zip(results['bare'], results['py_vision']))
             rows.append({'size': '%dx%d' % (width, height), 'format': fmt.upper(), 'fps': fps,
                          'output': output,
-                         'bare_ms': bare, 'py_vision_ms': ours, 'ratio': ours / bare,
+                         'bare_ms': bare, 'py_vision_ms': ours, 'ratio': ratio,
                          'measured_fps': statistics.median(
                              r['fps'] for r in results['py_vision']),
                          'runs': results})

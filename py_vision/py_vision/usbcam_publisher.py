@@ -219,7 +219,8 @@ class USBImagePublisher(Node):
 
 def video_device_of(argv):
     """Return the video_device a command line gives (-p, --param, --params-file), or default."""
-    device = USBImagePublisher.OWN_PARAMETERS[0].default
+    device = next(spec.default for spec in USBImagePublisher.OWN_PARAMETERS
+                  if spec.name == 'video_device')
     words = list(argv[1:])
     for flag, word in zip(words, words[1:]):
         if flag in ('-p', '--param') and word.startswith('video_device:='):

@@ -84,8 +84,8 @@ class CaptureLoop:
 
     `open_camera()` returns an opened Camera or raises SourceError; `on_frame(camera, frame)`
     publishes a frame (on the capture thread); `logger` has info/warning/error. `clock` and
-    `timing` are for tests. `on_failure(error)` is called when on_frame raises: the loop
-    then stops.
+    `timing` are for tests. `on_failure(error)` is called when the capture thread fails with
+    an unexpected error (on_frame raised): the loop then stops reading.
     """
 
     def __init__(self, open_camera: Callable[[], Camera],
@@ -126,8 +126,12 @@ class CaptureLoop:
 
     def start(self) -> None:
         """Read frames on the capture thread (opening the camera first if it is closed)."""
-        if self._thread is not None:
-            return
+        thread = self._thread
+        if thread is not None:
+            if thread.is_alive() and not self._stop.is_set():
+                return  # reading already
+            if not self.pause():
+                return  # a paused thread that has still not ended
         self.open()
         self._stop.clear()
         self._not_before = self._clock.now()
@@ -138,8 +142,14 @@ class CaptureLoop:
     resume = start
 
     def pause(self, timeout: float = 2.0) -> bool:
-        """Stop reading, keeping the device open; False if the thread did not end in time."""
-        thread, self._thread = self._thread, None
+        """
+        Stop reading, keeping the device open with its controls; False if still reading.
+
+        The driver may go on filling its buffers meanwhile: what it captured before start()
+        is dropped then, never handed to on_frame. A thread that did not end within timeout
+        is left to end (a read stuck in the driver); start() and close() wait for it.
+        """
+        thread = self._thread
         if thread is None:
             return True
         self._stop.set()
@@ -147,8 +157,11 @@ class CaptureLoop:
         if camera is not None:
             camera.interrupt()  # a synthetic camera or a file waiting for its next frame
         thread.join(timeout)
+        if thread.is_alive():
+            return False
+        self._thread = None
         self._update(streaming=False)
-        return not thread.is_alive()
+        return True
 
     def close(self, timeout: float = 2.0) -> bool:
         """Stop reading and release the device; False if the thread did not end in time."""
