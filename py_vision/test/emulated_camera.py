@@ -58,11 +58,12 @@ _MAGIC = 0x45435655
 _STATE_SIZE = 4096
 _OFF_NODE, _OFF_PLUGGED, _OFF_GENERATION, _OFF_STALLED, _OFF_DENIED = 4, 8, 12, 16, 20
 _OFF_OWNER, _OFF_FORMAT, _OFF_FRAME, _OFF_INTERVAL = 24, 32, 36, 40
-_OFF_SENSOR, _OFF_SERVED, _OFF_VALUES = 48, 56, 64
+_OFF_SENSOR, _OFF_SERVED, _OFF_VALUES, _OFF_RENDER_NS = 48, 56, 64, 320
 _MAX_CONTROLS = 48
 _TYPES = {'integer': 1, 'boolean': 2, 'menu': 3}
 _FLAG_READ_ONLY = 0x4
 _FAULTS = ('stalled', 'denied')
+EFFECTS = ('brightness', 'contrast', 'saturation', 'gain', 'exposure', 'white_balance')
 
 
 class CompilerMissing(RuntimeError):
@@ -213,6 +214,9 @@ def load_model(model):
     by_name = {c['name']: c for c in data['controls']}
     for index, control in enumerate(data['controls']):
         control['index'] = index
+        if control.get('effect') not in (None,) + EFFECTS:
+            raise ValueError('%s: %s has effect %r, not one of %s'
+                             % (path, control['name'], control['effect'], ', '.join(EFFECTS)))
         for master in control.get('inactive_unless', {}):
             if master not in by_name:
                 raise ValueError('%s: %s depends on unknown control %s'
@@ -226,8 +230,10 @@ class EmulatedCamera:
 
     `state_dir` holds its directory (a test's temporary directory); `model` names a data file
     in uvc_emulator/cameras (or is a path to one); `node` is the N of /dev/videoN. Options:
-    `serial` (by-id name; the data file's by default), `stalled` and `denied` (start with that
-    fault), `corrupt_every` (overrides the data file's broken-JPEG period; 0: never).
+    `serial` and `usb_port` (the by-id and by-path names; the data file's by default),
+    `stalled` and `denied` (start with that fault), `corrupt_every` (overrides the data
+    file's broken-JPEG period; 0: never). `close()` unplugs it and removes its directory (the
+    `emulated_camera` fixture does this after the test).
     """
 
     def __init__(self, state_dir, model='webcam_1080p', node=40, **faults):
@@ -282,6 +288,8 @@ class EmulatedCamera:
                 flags, master_id, manual, c['label']))
             for index, name in sorted((c.get('menu') or {}).items()):
                 lines.append('menu %#x %d %s' % (c['id'], index, name))
+            if c.get('effect'):
+                lines.append('effect %#x %s' % (c['id'], c['effect']))
         (self.dir / 'camera.conf').write_text('\n'.join(lines) + '\n')
         (self.dir / 'empty').mkdir()  # listed in place of /dev/v4l/by-id where udev made none
 
@@ -336,6 +344,11 @@ class EmulatedCamera:
     def frames_served(self):
         """Return how many frames went into streaming buffers so far (all processes)."""
         return self._get('Q', _OFF_SERVED)
+
+    @property
+    def render_seconds(self):
+        """Return the CPU time the library spent making frames so far (all processes)."""
+        return self._get('Q', _OFF_RENDER_NS) / 1e9
 
     @property
     def next_index(self):

@@ -88,6 +88,7 @@ struct shared_state {
     uint64_t sensor_frames;  /* 48: index of the next frame the sensor makes */
     uint64_t frames_served;  /* 56: frames delivered into buffers */
     int32_t values[64];      /* 64: control values, in camera.conf order */
+    uint64_t render_ns;      /* 320: CPU time spent making frames (all processes) */
 };
 
 struct frame_desc {
@@ -119,7 +120,13 @@ struct control_desc {
     char name[32];
     uint32_t n_menu;
     struct menu_entry menu[MAX_MENU];
+    int effect;                            /* what the control does to the picture */
 };
+
+enum { FX_NONE, FX_BRIGHTNESS, FX_CONTRAST, FX_SATURATION, FX_GAIN, FX_EXPOSURE,
+       FX_WHITE_BALANCE };
+static const char *const effect_names[] = {"none", "brightness", "contrast", "saturation",
+                                           "gain", "exposure", "white_balance"};
 
 struct jpeg_cache;
 
@@ -145,6 +152,8 @@ struct camera {
     int have_tables;
     struct jpeg_cache *jcache[MAX_FORMATS][MAX_FRAMES];
     uint8_t *backgrounds[MAX_FRAMES * MAX_FORMATS];
+    uint8_t *looks[MAX_FRAMES * MAX_FORMATS];     /* the backgrounds as the controls make them */
+    uint64_t look_keys[MAX_FRAMES * MAX_FORMATS];
     pthread_mutex_t lock;                  /* backgrounds and JPEG caches */
 };
 
@@ -155,6 +164,7 @@ struct buffer {
     uint32_t bytesused, sequence;
     struct timeval timestamp;
     int bg_frame;                          /* which background the buffer holds (YUYV) */
+    uint64_t bg_look;                      /* and with which control values */
 };
 
 struct handle {
@@ -186,6 +196,7 @@ struct handle {
     struct v4l2_fract interval;
     uint32_t sequence;
     uint8_t *scratch;                      /* YUYV of the current frame, MJPEG mode */
+    uint64_t scratch_look;
 };
 
 static struct camera *cameras[MAX_CAMERAS];
@@ -196,6 +207,7 @@ static pthread_once_t init_once = PTHREAD_ONCE_INIT;
 static uint64_t instance_id;
 static uint32_t next_token;
 static uint32_t kernel_version;
+static pid_t table_pid;    /* the process the handle table belongs to (not a vfork child) */
 
 static int (*real_open)(const char *, int, ...);
 static int (*real_open64)(const char *, int, ...);
@@ -345,6 +357,14 @@ static void load_camera(const char *dir)
                    &c->maximum, &c->step, &c->def, &c->flags, (int *)&c->master_id,
                    &c->master_manual, &n);
             copy_text(c->name, sizeof(c->name), rest + n);
+        } else if (!strcmp(line, "effect")) {
+            uint32_t id;
+            char kind[32] = {0};
+            if (sscanf(rest, "%i %31s", (int *)&id, kind) == 2)
+                for (uint32_t i = 0; i < cam->n_controls; i++)
+                    for (int k = 1; k < (int)(sizeof(effect_names) / sizeof(*effect_names)); k++)
+                        if (cam->controls[i].id == id && !strcmp(kind, effect_names[k]))
+                            cam->controls[i].effect = k;
         } else if (!strcmp(line, "menu")) {
             uint32_t id;
             int index, n = 0;
@@ -378,6 +398,7 @@ static void load_camera(const char *dir)
 
 static void after_fork_child(void)
 {
+    table_pid = getpid();
     pthread_mutex_init(&table_lock, NULL);
     for (int i = 0; i < MAX_FDS; i++) {
         struct handle *h = handles[i];
@@ -441,7 +462,15 @@ static void init(void)
             load_camera(dir);
         free(copy);
     }
+    table_pid = getpid();
     pthread_atfork(NULL, NULL, after_fork_child);
+}
+
+/* A vfork child (subprocess closing descriptors before exec) shares our memory but runs no
+ * fork handlers: it must leave the table alone. */
+static int table_is_ours(void)
+{
+    return getpid() == table_pid;
 }
 
 static void ensure_init(void)
@@ -582,7 +611,7 @@ static int dead(struct handle *h)
 
 static struct handle *lookup(int fd)
 {
-    if (fd < 0 || fd >= MAX_FDS || !n_cameras)
+    if (fd < 0 || fd >= MAX_FDS || !n_cameras || !table_is_ours())
         return NULL;
     pthread_mutex_lock(&table_lock);
     struct handle *h = handles[fd];
@@ -665,7 +694,7 @@ static int open_device(struct camera *cam, int flags)
 /* Any real open that returns a number we still hold means that entry is stale. */
 static int forget_stale(int fd)
 {
-    if (fd >= 0 && fd < MAX_FDS && n_cameras) {
+    if (fd >= 0 && fd < MAX_FDS && n_cameras && table_is_ours()) {
         pthread_mutex_lock(&table_lock);
         struct handle *h = handles[fd];
         handles[fd] = NULL;
@@ -930,6 +959,7 @@ static void encode_mcu(struct camera *cam, struct bitwriter *w, const uint8_t *y
 }
 
 struct jpeg_cache {
+    uint64_t look;
     uint32_t width, height, mcus_x, mcus_y;
     uint8_t header[4096];
     uint32_t header_len;
@@ -944,16 +974,24 @@ static void put16(uint8_t *p, uint32_t v)
 }
 
 static struct jpeg_cache *jpeg_cache_for(struct camera *cam, uint32_t fmt, uint32_t frame,
-                                         const uint8_t *background)
+                                         const uint8_t *background, uint64_t look)
 {
     pthread_mutex_lock(&cam->lock);
     struct jpeg_cache *jc = cam->jcache[fmt][frame];
-    if (jc) {
+    if (jc && jc->look == look) {
         pthread_mutex_unlock(&cam->lock);
         return jc;
     }
+    if (jc) {                 /* the controls changed the picture: encode it again */
+        free(jc->data);
+        free(jc->offset);
+        free(jc->length);
+        free(jc);
+        cam->jcache[fmt][frame] = NULL;
+    }
     const struct frame_desc *fd = &cam->formats[fmt].frames[frame];
     jc = calloc(1, sizeof(*jc));
+    jc->look = look;
     jc->width = fd->width;
     jc->height = fd->height;
     jc->mcus_x = (fd->width + 15) / 16;
@@ -1044,13 +1082,88 @@ static void draw_code(const struct frame_desc *fd, uint8_t *yuyv, uint64_t index
     }
 }
 
-static const uint8_t *background_for(struct camera *cam, uint32_t fmt, uint32_t frame)
+static int inactive(struct camera *cam, const struct control_desc *c);
+
+/* A key for the control values that change the picture: 0 when none does. */
+static uint64_t look_key(struct camera *cam)
+{
+    uint64_t key = 0;
+    for (uint32_t i = 0; i < cam->n_controls; i++) {
+        const struct control_desc *c = &cam->controls[i];
+        if (!c->effect || inactive(cam, c))
+            continue;
+        int32_t v = __atomic_load_n(&cam->state->values[i], __ATOMIC_ACQUIRE);
+        if (v == c->def)
+            continue;
+        key = (key ^ ((uint64_t)i << 32 | (uint32_t)v)) * 1099511628211ull + 1;
+    }
+    return key;
+}
+
+static uint8_t clamp8(float v)
+{
+    return v < 0 ? 0 : v > 255 ? 255 : (uint8_t)lrintf(v);
+}
+
+/* The picture as the controls make it: brightness, contrast, gain and exposure on luma,
+ * saturation and a manual white balance on chroma. */
+static void apply_look(struct camera *cam, const uint8_t *src, uint8_t *dst, size_t size)
+{
+    float bright = 0, contrast = 1, gain = 1, sat = 1, wb = 0;
+    for (uint32_t i = 0; i < cam->n_controls; i++) {
+        const struct control_desc *c = &cam->controls[i];
+        if (!c->effect || inactive(cam, c))
+            continue;
+        float v = (float)__atomic_load_n(&cam->state->values[i], __ATOMIC_ACQUIRE);
+        float d = (float)c->def, range = (float)(c->maximum - c->minimum);
+        float ratio = d > 0 ? v / d : 1 + (v - d) / (range > 0 ? range : 1);
+        switch (c->effect) {
+        case FX_BRIGHTNESS:
+            bright += (v - d) * 127.0f / (range > 0 ? range : 1);
+            break;
+        case FX_CONTRAST:
+            contrast *= ratio;
+            break;
+        case FX_SATURATION:
+            sat *= ratio;
+            break;
+        case FX_GAIN:
+            gain *= 1 + (v - d) / (range > 0 ? range : 1);
+            break;
+        case FX_EXPOSURE:
+            gain *= ratio;
+            break;
+        case FX_WHITE_BALANCE:
+            wb += (d - v) / 50.0f;     /* lower temperatures bluer */
+            break;
+        default:
+            break;
+        }
+    }
+    uint8_t ly[256], lu[256], lv[256];
+    for (int i = 0; i < 256; i++) {
+        ly[i] = clamp8((((float)i - 128) * contrast + 128 + bright - 16) * gain + 16);
+        lu[i] = clamp8(((float)i - 128) * sat + 128 + wb);
+        lv[i] = clamp8(((float)i - 128) * sat + 128 - wb);
+    }
+    for (size_t p = 0; p + 3 < size; p += 4) {
+        dst[p] = ly[src[p]];
+        dst[p + 1] = lu[src[p + 1]];
+        dst[p + 2] = ly[src[p + 2]];
+        dst[p + 3] = lv[src[p + 3]];
+    }
+}
+
+/* The background of a size as the controls make it now, and the key of that look. */
+static const uint8_t *background_for(struct camera *cam, uint32_t fmt, uint32_t frame,
+                                     uint64_t *look)
 {
     const struct frame_desc *fd = &cam->formats[fmt].frames[frame];
     size_t size = (size_t)fd->width * fd->height * 2;
+    uint32_t slot = fmt * MAX_FRAMES + frame;
+    uint64_t key = look_key(cam);
     pthread_mutex_lock(&cam->lock);
-    uint8_t **slot = &cam->backgrounds[fmt * MAX_FRAMES + frame];
-    if (!*slot) {
+    if (!cam->backgrounds[slot]) {
         uint8_t *bg = malloc(size);
         size_t got = 0;
         if (bg && (read_file(fd->background, bg, size, &got) != 0 || got != size)) {
@@ -1060,22 +1173,36 @@ static const uint8_t *background_for(struct camera *cam, uint32_t fmt, uint32_t 
                 bg[i + 1] = 128;
             }
         }
-        *slot = bg;
+        cam->backgrounds[slot] = bg;
+    }
+    const uint8_t *result = cam->backgrounds[slot];
+    if (key) {
+        if (!cam->looks[slot])
+            cam->looks[slot] = malloc(size);
+        if (cam->look_keys[slot] != key) {
+            apply_look(cam, cam->backgrounds[slot], cam->looks[slot], size);
+            cam->look_keys[slot] = key;
+        }
+        result = cam->looks[slot];
     }
     pthread_mutex_unlock(&cam->lock);
-    return *slot;
+    *look = key;
+    return result;
 }
 
 static uint32_t render_jpeg(struct handle *h, uint8_t *out, size_t cap, uint64_t index)
 {
     struct camera *cam = h->cam;
     const struct frame_desc *fd = &cam->formats[h->fmt].frames[h->frame];
-    const uint8_t *bg = background_for(cam, h->fmt, h->frame);
-    struct jpeg_cache *jc = jpeg_cache_for(cam, h->fmt, h->frame, bg);
+    uint64_t look;
+    const uint8_t *bg = background_for(cam, h->fmt, h->frame, &look);
+    struct jpeg_cache *jc = jpeg_cache_for(cam, h->fmt, h->frame, bg, look);
     size_t frame_size = (size_t)fd->width * fd->height * 2;
-    if (!h->scratch) {
-        h->scratch = malloc(frame_size);
+    if (!h->scratch || h->scratch_look != look) {
+        if (!h->scratch)
+            h->scratch = malloc(frame_size);
         memcpy(h->scratch, bg, frame_size);
+        h->scratch_look = look;
     }
     draw_code(fd, h->scratch, index);
     uint32_t mx0 = 1, mx1 = 0, my0 = 1, my1 = 0;
@@ -1136,9 +1263,13 @@ static uint32_t render_frame(struct handle *h, uint32_t b, uint64_t index)
     if (fmt->fourcc == V4L2_PIX_FMT_MJPEG && cam->have_tables)
         return render_jpeg(h, out, fd->sizeimage, index);
     size_t size = (size_t)fd->width * fd->height * 2;
-    if (h->buffers[b].bg_frame != (int)(h->fmt * MAX_FRAMES + h->frame)) {
-        memcpy(out, background_for(cam, h->fmt, h->frame), size);
+    uint64_t look;
+    const uint8_t *bg = background_for(cam, h->fmt, h->frame, &look);
+    if (h->buffers[b].bg_frame != (int)(h->fmt * MAX_FRAMES + h->frame)
+            || h->buffers[b].bg_look != look) {
+        memcpy(out, bg, size);
         h->buffers[b].bg_frame = (int)(h->fmt * MAX_FRAMES + h->frame);
+        h->buffers[b].bg_look = look;
     }
     draw_code(fd, out, index);
     return (uint32_t)size;
@@ -1207,7 +1338,13 @@ static void *producer(void *arg)
         memmove(h->queued, h->queued + 1, --h->n_queued * sizeof(uint32_t));
         h->in_flight++;
         pthread_mutex_unlock(&h->lock);
+        struct timespec c0, c1;
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
         uint32_t used = render_frame(h, b, index);
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
+        __atomic_fetch_add(&s->render_ns, (uint64_t)((c1.tv_sec - c0.tv_sec) * 1000000000LL
+                                                     + (c1.tv_nsec - c0.tv_nsec)),
+                           __ATOMIC_ACQ_REL);
         struct timeval tv = {(time_t)due, (suseconds_t)((due - (time_t)due) * 1e6)};
         pthread_mutex_lock(&h->lock);
         struct buffer *buf = &h->buffers[b];
