@@ -96,12 +96,13 @@ class ControlParameters:
 
     `set_control(name, value) -> reason or None` applies a change (the capture loop's);
     `read_controls()` returns the device's controls now (empty while it is lost). `log` has
-    info and warning.
+    info and warning; `device` names the camera in them.
     """
 
     def __init__(self, parameters: Parameters, set_control: Callable[[str, Any], Optional[str]],
-                 read_controls: Callable[[], List[ControlInfo]], log):
+                 read_controls: Callable[[], List[ControlInfo]], log, device: str = 'the camera'):
         self._parameters = parameters
+        self._device = device
         self._set_control = set_control
         self._read_controls = read_controls
         self._log = log
@@ -133,8 +134,8 @@ class ControlParameters:
             control = by_id.get(alias.cid)
             if control is None or alias.name in self._targets:
                 if control is None and self._parameters.given(alias.name) is not None:
-                    self._log.warning('the camera has no %s control: %s is not used' % (
-                        alias.description, alias.name))
+                    self._log.warning('%s: %s has no such control; the value is not used' % (
+                        alias.name, self._device))
                 continue
             self._targets[alias.name] = (alias.cid, alias)
             wanted.append(alias.name)

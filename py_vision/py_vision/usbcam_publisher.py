@@ -125,7 +125,8 @@ class USBImagePublisher(Node):
         except SourceError as error:
             raise ConfigError(str(error))
         self.controls = ControlParameters(params, self.capture.set_control,
-                                          self.capture.controls, self.get_logger())
+                                          self.capture.controls, self.get_logger(),
+                                          self.video_device)
         self.controls.declare(set(values))
         self.create_timer(CONTROL_SYNC_PERIOD_S, self.controls.sync)
         self.calibration = CameraInfoManager(
