@@ -177,6 +177,11 @@ def run(node_class, args=None):
         sys.stdout.write(help_text(node_class.NODE_NAME, node_class.PARAMETERS,
                                    node_class.SUMMARY))
         return 0
+    # A node's own commands (COMMANDS: flag -> function(argv) -> exit status) run instead of
+    # the node, without a ROS graph: usbcam_publisher --list-formats.
+    for flag, command in getattr(node_class, 'COMMANDS', {}).items():
+        if flag in argv[1:]:
+            return command(argv)
     # From here a signal is a request, carried out at the next of the checks below: rclpy
     # starting or the node being built is never cut short (a context shut down while a
     # service or a timer is being created can deadlock), and what was built is closed.

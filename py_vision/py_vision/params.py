@@ -196,12 +196,14 @@ class Parameters:
         self._declaring = False
         node.add_on_set_parameters_callback(self._on_set)
 
-    def declare(self, spec: Spec, on_change: Optional[Callable[[Any], None]] = None) -> Any:
+    def declare(self, spec: Spec, on_change: Optional[Callable[[Any], Optional[str]]] = None
+                ) -> Any:
         """
         Declare spec's parameter with its real type; return its checked value (None: not set).
 
         A live parameter needs on_change(value), which applies a new value once it has been
-        checked like at start-up. Raises ConfigError when the start-up value is unusable.
+        checked like at start-up and returns None, or why it refused. Raises ConfigError when
+        the start-up value is unusable.
         """
         if spec.live and on_change is None:
             raise ValueError('live parameter %s needs an on_change callback' % spec.name)
@@ -229,6 +231,52 @@ class Parameters:
         finally:
             self._declaring = False
         return value
+
+    def declare_shown(self, spec: Spec,
+                      on_change: Optional[Callable[[Any], Optional[str]]] = None) -> None:
+        """Declare spec's parameter with spec.default, what the node found (a camera's value)."""
+        if spec.live and on_change is None:
+            raise ValueError('live parameter %s needs an on_change callback' % spec.name)
+        self._specs[spec.name] = (spec, on_change)
+        self._declaring = True
+        try:
+            self._node.declare_parameter(spec.name, spec.default, spec.descriptor(),
+                                         ignore_override=True)
+        finally:
+            self._declaring = False
+
+    def given(self, name: str) -> Any:
+        """Return the value the user gave a parameter not declared yet (None: not given)."""
+        node = self._node
+        self._declaring = True
+        try:
+            given = node.declare_parameter(
+                name, None, ParameterDescriptor(dynamic_typing=True)).value
+            node.undeclare_parameter(name)
+        finally:
+            self._declaring = False
+        return None if given in _NOT_SET_WORDS else given
+
+    def show(self, values: Dict[str, Any], specs: Sequence[Spec] = ()) -> None:
+        """
+        Show values the node learned elsewhere (a camera's) without applying them again.
+
+        specs: new descriptors for parameters whose description changed (e.g. a control that
+        became inactive). Read-only parameters keep the value they were declared with.
+        """
+        node = self._node
+        self._declaring = True
+        try:
+            for spec in specs:
+                if node.has_parameter(spec.name) and spec.live:
+                    node.set_descriptor(spec.name, spec.descriptor())
+            changes = [Parameter(name, value=value) for name, value in values.items()
+                       if node.has_parameter(name) and node.get_parameter(name).value != value
+                       and self._specs[name][0].live]
+            if changes:
+                node.set_parameters(changes)
+        finally:
+            self._declaring = False
 
     def _on_set(self, parameters):
         # rclpy itself refuses read-only parameters, wrong types and values out of the range;

@@ -102,11 +102,12 @@ class ImagePublisher:
         raw_done = compressed_done = False
         if self.wants_raw() or not self._lazy_raw:
             image = bgr()
-            if image is not None:
-                msg = self._bridge.cv2_to_imgmsg(image, 'bgr8')
-                msg.header = header
-                self.raw.publish(msg)
-                raw_done = True
+            if image is None:
+                return False, False  # not a whole image (a JPEG that does not decode): no part
+            msg = self._bridge.cv2_to_imgmsg(image, 'bgr8')
+            msg.header = header
+            self.raw.publish(msg)
+            raw_done = True
         if self.wants_compressed():
             if jpeg is None:
                 image = bgr()

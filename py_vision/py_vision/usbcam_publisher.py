@@ -19,18 +19,21 @@ The ROS 2 port of the tutorial's publisher, grown into a driver. Frames are read
 thread (the camera paces itself), stamped with their capture time and published at once: raw
 bgr8 on usb_camera/image, JPEG on usb_camera/image/compressed (the camera's own JPEG untouched
 in MJPEG mode), each only while it has subscribers, and the CameraInfo of every frame on
-usb_camera/camera_info with exactly the image's header. A camera that fails mid-stream is
-released and reopened with back-off; publishing resumes when it is back and the controls the
-user set are applied again. The node is a thin adapter: the camera itself is camera.Camera.
+usb_camera/camera_info with exactly the image's header. The node is a thin adapter: it
+keeps the parameters, publishers and services; opening, reading, losing and reopening the camera
+is the camera layer's CaptureLoop (py_vision.capture), which calls publish_image() with each new
+frame.
 """
 
-import threading
+import sys
 import time
 
 import cv2
 from py_vision import dds
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
-from py_vision.camera import Camera, CONTROL_NAMES, PIXEL_FORMATS, SourceError
+from py_vision.capture import Camera, CaptureLoop, PIXEL_FORMATS, SourceError, SyntheticDevices
+from py_vision.capture.listing import device_listing
+from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
 from py_vision.node_main import ConfigError, main_for
 from py_vision.params import Parameters, Spec
@@ -43,39 +46,13 @@ from rclpy.time import Time
 from sensor_msgs.msg import CameraInfo
 from sensor_msgs.srv import SetCameraInfo
 from std_msgs.msg import Header
+import yaml
 
-# Consecutive failed reads after which the device counts as gone (one bad read is noise).
-LOST_AFTER_FAILED_READS = 5
-REOPEN_BACKOFF_S = (0.25, 0.5, 1.0, 2.0, 4.0)
-REOPEN_LOG_PERIOD_S = 5.0
 IMAGE_TOPIC = 'usb_camera/image'
 
 
-def _control(name, kind, description, value_range=None):
-    # Not set unless the user sets it: the camera keeps its own value. The range here is what
-    # any UVC camera could accept; the camera's own range is checked when the value is applied.
-    # The mark tells the browser viewer's camera panel it is a control, and its type (a
-    # parameter that is not set has no other way to show it).
-    return Spec(name, kind, description + " (not set: the camera's own value)", value_range,
-                live=True, constraints='camera control, %s' % (
-                    'bool' if kind is bool else 'integer'))
-
-
-_CONTROL_SPECS = (
-    _control('brightness', int, 'camera brightness', (-255, 255)),
-    _control('contrast', int, 'camera contrast', (0, 255)),
-    _control('saturation', int, 'camera colour saturation', (0, 255)),
-    _control('sharpness', int, 'camera sharpness', (0, 255)),
-    _control('gain', int, 'camera gain', (0, 255)),
-    _control('auto_white_balance', bool, 'automatic white balance'),
-    _control('white_balance', int, 'white balance temperature in kelvin, with '
-             'auto_white_balance off', (1000, 10000)),
-    _control('autoexposure', bool, 'automatic exposure'),
-    _control('exposure', int, 'exposure time in 100 us units, with autoexposure off',
-             (1, 10000)),
-    _control('autofocus', bool, 'automatic focus'),
-    _control('focus', int, 'focus position, with autofocus off', (0, 1023)),
-)
+# How often the control parameters are brought up to date with the device's values.
+CONTROL_SYNC_PERIOD_S = 0.5
 
 
 class USBImagePublisher(Node):
@@ -83,8 +60,10 @@ class USBImagePublisher(Node):
     PUBLISHES = dds.OWN_SIZE
     SUMMARY = ('Publishes a USB camera (or a video file, or the built-in synthetic camera) as '
                'sensor_msgs/Image on usb_camera/image, JPEG on usb_camera/image/compressed '
-               'and CameraInfo on usb_camera/camera_info.')
-    PARAMETERS = (
+               'and CameraInfo on usb_camera/camera_info. Every control the camera reports is '
+               "a parameter too, with the camera's range (ros2 param describe); "
+               '--list-formats prints what the camera offers and exits.')
+    OWN_PARAMETERS = (
         Spec('video_device', '/dev/video0',
              'V4L2 device path, OpenCV camera index, video file, or "synthetic[?options]"',
              check=bool, accepted='a device path, an index, a file or synthetic'),
@@ -104,13 +83,14 @@ class USBImagePublisher(Node):
              'package://pkg/path.yaml; empty: ~/.ros/camera_info/${NAME}.yaml if it exists'),
         Spec('reliability', 'reliable', 'publisher QoS reliability', choices=tuple(RELIABILITY)),
         Spec('depth', 10, 'publisher QoS queue depth', (1, 1000)),
-    ) + _CONTROL_SPECS
+    )
+    # --help lists usb_cam's control names too; the camera's own are declared once it is open.
+    PARAMETERS = OWN_PARAMETERS + ALIAS_HELP
 
     # What close() finds when start-up was interrupted before these were made.
-    camera = None
-    _thread = None
+    capture = controls = None
     _log_name = NODE_NAME
-    frames_captured = raw_published = compressed_published = frames_decoded = 0
+    raw_published = compressed_published = frames_decoded = 0
 
     def __init__(self):
         super().__init__(self.NODE_NAME)
@@ -121,41 +101,40 @@ class USBImagePublisher(Node):
         # which spin after every parallel call: one thread halves the capture's CPU
         # (bench/bench_transport.py).
         cv2.setNumThreads(1)
-        self._stop = threading.Event()
-        self._camera_lock = threading.Lock()
-        self.camera = None
-        self._controls = {}
         params = Parameters(self)
         live = {'jpeg_quality': self._set_jpeg_quality, 'frame_id': self._set_frame_id}
-        live.update({name: self._control_setter(name) for name in CONTROL_NAMES})
         values = {spec.name: params.declare(spec, live.get(spec.name))
-                  for spec in self.PARAMETERS}
+                  for spec in self.OWN_PARAMETERS}
         self.video_device = values['video_device']
         self.size = (values['image_width'], values['image_height'])
         self.framerate = values['framerate']
         self.pixel_format = values['pixel_format']
         self.frame_id = values['frame_id']
-        self._controls = {name: values[name] for name in CONTROL_NAMES
-                          if values[name] is not None}
 
         qos = publisher_qos(values['reliability'], values['depth'])
         self.images = ImagePublisher(self, IMAGE_TOPIC, qos, CvBridge())
         self.images.jpeg_quality = values['jpeg_quality']
         self.info_publisher = self.create_publisher(
             CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
+        self._synthetic = SyntheticDevices()
+        self.failed = False
+        self.capture = CaptureLoop(self._open_camera, self.publish_image, self.get_logger(),
+                                   name=self.video_device, on_failure=self._capture_failed)
         try:
-            self.camera = self._open()
+            self.capture.open()
         except SourceError as error:
             raise ConfigError(str(error))
+        self.controls = ControlParameters(params, self.capture.set_control,
+                                          self.capture.controls, self.get_logger(),
+                                          self.video_device)
+        self.controls.declare(set(values))
+        self.create_timer(CONTROL_SYNC_PERIOD_S, self.controls.sync)
         self.calibration = CameraInfoManager(
             values['camera_name'], values['camera_info_url'], self.get_logger())
         self.calibration.load()
         self.create_service(SetCameraInfo, sibling_topic(self, IMAGE_TOPIC, 'set_camera_info'),
                             self._set_camera_info)
-        self._apply_controls(self.camera, at_start=True)
-        self.failed = False
-        self._thread = threading.Thread(target=self._capture_loop, name='capture', daemon=True)
-        self._thread.start()
+        self.capture.start()
 
     # --- parameters ------------------------------------------------------------------
 
@@ -164,33 +143,6 @@ class USBImagePublisher(Node):
 
     def _set_jpeg_quality(self, quality):
         self.images.jpeg_quality = quality
-
-    def _control_setter(self, name):
-        def apply(value):
-            with self._camera_lock:
-                camera = self.camera
-                if camera is None:  # reconnecting: applied when the camera is back
-                    self._controls[name] = value
-                    return None
-                ok, got, message = camera.set_control(name, value)
-            if not ok:
-                return message
-            self._controls[name] = value
-            if message:
-                self.get_logger().info(message)
-            return None
-        return apply
-
-    def _apply_controls(self, camera, at_start=False):
-        """Set every control the user gave; one warning for each the camera does not take."""
-        for name, value in list(self._controls.items()):
-            ok, got, message = camera.set_control(name, value)
-            if not ok:
-                self.get_logger().warning("%s; left at the camera's own value" % message)
-                if at_start:
-                    del self._controls[name]
-            elif message:
-                self.get_logger().info(message)
 
     # --- calibration -----------------------------------------------------------------
 
@@ -203,67 +155,27 @@ class USBImagePublisher(Node):
 
     # --- capture ---------------------------------------------------------------------
 
-    def _open(self):
+    def _open_camera(self):
+        """Open the camera the parameters name (called by the capture loop at each (re)open)."""
         camera = Camera.open(self.video_device, self.size[0], self.size[1], self.framerate,
-                             self.pixel_format)
-        note = ''
-        if (camera.width, camera.height) != self.size:
-            note = ' (requested %dx%d; publishing what the device gives)' % self.size
-        self.get_logger().info('opened %s: %s%s, publishing on %s' % (
-            self.video_device, camera.describe(), note, self.images.raw.topic_name))
+                             self.pixel_format, synthetic=self._synthetic)
+        self.get_logger().info('opened %s: %s, publishing on %s' % (
+            self.video_device, camera.describe(), self.images.raw.topic_name))
         for line in camera.notes:
             self.get_logger().warning(line)
         return camera
 
-    def _capture_loop(self):
-        """Read, stamp and publish frames until close(); the camera belongs to this thread."""
-        try:
-            self._capture()
-        except Exception as error:
-            if self.context.ok():
-                # A device or frame this node cannot handle: say so and end the node.
-                self.get_logger().error('capturing from %s failed: %s: %s' % (
-                    self.video_device, type(error).__name__, error))
-                self.failed = True
-                try:
-                    rclpy.try_shutdown(context=self.context)
-                except Exception:  # a signal shut it down at the same moment
-                    pass
-            # else: Ctrl-C or SIGTERM shut rclpy down while a frame was being published.
-        finally:
-            with self._camera_lock:
-                camera, self.camera = self.camera, None
-            if camera is not None:
-                camera.release()
-
-    def _capture(self):
-        failed_reads = 0
-        while not self._stop.is_set():
-            camera = self.camera
-            if camera is None:
-                camera = self._reopen()
-                with self._camera_lock:
-                    self.camera = camera
-                    if camera is not None:
-                        self._apply_controls(camera)
-                continue
-            with self._camera_lock:
-                frame = camera.read()
-            if self._stop.is_set():
-                return
-            if frame is None:
-                failed_reads += 1
-                if failed_reads >= LOST_AFTER_FAILED_READS:
-                    self.get_logger().warning(
-                        'lost %s after %d failed reads; releasing it and reopening' % (
-                            self.video_device, failed_reads))
-                    with self._camera_lock:
-                        self.camera = None
-                    camera.release()
-                    failed_reads = 0
-                continue
-            failed_reads = 0
-            self._publish(camera, frame)
+    def _capture_failed(self, error):
+        """Say that a frame could not be published, and end the node."""
+        if self.context.ok():
+            self.get_logger().error('capturing from %s failed: %s: %s' % (
+                self.video_device, type(error).__name__, error))
+            self.failed = True
+            try:
+                rclpy.try_shutdown(context=self.context)
+            except Exception:  # a signal shut it down at the same moment
+                pass
+        # else: Ctrl-C or SIGTERM shut rclpy down while a frame was being published.
 
     def _capture_stamp(self, captured):
         """Return the capture time (time.monotonic(), or None) of a frame as a ROS time."""
@@ -275,7 +187,8 @@ class USBImagePublisher(Node):
             return now
         return Time(nanoseconds=now.nanoseconds - int(age_s * 1e9), clock_type=now.clock_type)
 
-    def _publish(self, camera, frame):
+    def publish_image(self, camera, frame):
+        """Publish one frame: image (raw and compressed, as subscribed) and its CameraInfo."""
         header = Header(stamp=self._capture_stamp(frame.capture_time).to_msg(),
                         frame_id=self.frame_id)
         raw, compressed = self.images.publish(header, frame.bgr, frame.jpeg)
@@ -283,55 +196,61 @@ class USBImagePublisher(Node):
         info = self.calibration.camera_info(camera.width, camera.height)
         info.header = header
         self.info_publisher.publish(info)
-        self.frames_captured += 1
         self.raw_published += raw
         self.compressed_published += compressed
 
-    def _reopen(self):
-        """Try to reopen the device with back-off until it is back or the node stops."""
-        attempt = 0
-        last_log = 0.0
-        while not self._stop.is_set():
-            delay = REOPEN_BACKOFF_S[min(attempt, len(REOPEN_BACKOFF_S) - 1)]
-            if self._stop.wait(delay):
-                return None
-            attempt += 1
-            try:
-                camera = self._open()
-            except SourceError as error:
-                if time.monotonic() - last_log >= REOPEN_LOG_PERIOD_S:
-                    last_log = time.monotonic()
-                    self.get_logger().warning('reopen attempt %d failed: %s' % (attempt, error))
-                continue
-            self.get_logger().info('%s is back after %d attempt(s); publishing resumes' % (
-                self.video_device, attempt))
-            return camera
-        return None
-
     def close(self):
-        """Stop capturing; the capture thread releases the camera."""
-        thread = self._thread
-        logger = get_logger(self._log_name + '.camera')
-        if thread is None:  # start-up was interrupted before capturing began
-            if self.camera is not None:
-                self.camera.release()
-                logger.info('camera released before capturing began')
+        """Stop capturing and release the camera."""
+        capture = self.capture
+        if capture is None:  # start-up was interrupted before the camera layer existed
             return
-        self._stop.set()
-        camera = self.camera
-        if camera is not None:
-            camera.interrupt()  # a synthetic camera or a file waiting for its next frame
-        thread.join(2.0)
-        if thread.is_alive():
+        logger = get_logger(self._log_name + '.camera')
+        started, opened = capture.running, capture.camera is not None
+        if not capture.close():
             logger.warning('%s is still busy; the system releases it at exit' % self.video_device)
-        else:
+        elif started:
             logger.info('camera released after %d frames (%d raw, %d compressed published; '
                         '%d JPEG encoded, %d decoded)' % (
-                            self.frames_captured, self.raw_published,
+                            capture.stats().frames, self.raw_published,
                             self.compressed_published, self.images.encoded,
                             self.frames_decoded))
+        elif opened:
+            logger.info('camera released before capturing began')
 
 
+def video_device_of(argv):
+    """Return the video_device a command line gives (-p, --param, --params-file), or default."""
+    device = next(spec.default for spec in USBImagePublisher.OWN_PARAMETERS
+                  if spec.name == 'video_device')
+    words = list(argv[1:])
+    for flag, word in zip(words, words[1:]):
+        if flag in ('-p', '--param') and word.startswith('video_device:='):
+            device = word.split(':=', 1)[1].strip('\'"')
+        elif flag == '--params-file':
+            try:
+                with open(word) as stream:
+                    content = yaml.safe_load(stream) or {}
+            except (OSError, yaml.YAMLError):
+                continue  # the node itself says what is wrong with the file
+            for section in (content.get('/**'), content.get(USBImagePublisher.NODE_NAME)):
+                value = ((section or {}).get('ros__parameters') or {}).get('video_device')
+                if value is not None:
+                    device = str(value)
+    return device
+
+
+def list_formats(argv):
+    """Print what the camera offers (--list-formats); return the exit status."""
+    device = video_device_of(argv)
+    try:
+        sys.stdout.write(device_listing(device))
+    except SourceError as error:
+        sys.stderr.write('%s: %s\n' % (USBImagePublisher.NODE_NAME, error))
+        return 1
+    return 0
+
+
+USBImagePublisher.COMMANDS = {'--list-formats': list_formats}
 main = main_for(USBImagePublisher)
 
 

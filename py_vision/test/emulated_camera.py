@@ -24,8 +24,8 @@ in its directory, shared by every process using it and by this object, which cha
 inject faults (unplug, replug under another node, stall, permission denied) and reads it back
 (control values, frames served). `busy()` streams from it in another process.
 
-Frames are the synthetic camera's picture (py_vision.synthetic_camera) without the moving box
-and digits: its background for the size, and the 4 x 11 frame-index code that
+Frames are the synthetic camera's picture (py_vision.capture.synthetic_picture) without the
+moving box and digits: its background for the size, and the 4 x 11 frame-index code that
 `read_frame_index` decodes, drawn by the library for each frame's index. How it works and the
 data-file format: docs/emulated_cameras.md.
 """
@@ -128,8 +128,8 @@ def build_library():
 
 
 def _synthetic():
-    from py_vision import synthetic_camera
-    return synthetic_camera
+    from py_vision.capture import synthetic_picture
+    return synthetic_picture
 
 
 def _picture_key():
@@ -143,7 +143,7 @@ def background(width, height):
     path = cache_dir() / ('background-%dx%d-%s.yuyv' % (width, height, _picture_key()))
     if path.exists() and path.stat().st_size == width * height * 2:
         return np.fromfile(str(path), np.uint8).reshape(height, width, 2)
-    picture = sc._layout(width, height).background.copy()
+    picture = sc.frame_layout(width, height).background.copy()
     _atomic_write(path, picture.tobytes())
     return picture
 

@@ -54,7 +54,8 @@ def test_help_lists_the_parameters_and_starts_nothing(launch, executable, flag):
     if executable == 'usbcam_publisher':
         assert re.search(r'framerate \(double, a number > 0 and <= 1000; default 10\.0\)', out)
         assert 'image_width (integer, 1..8192; default 640)' in out
-        assert 'brightness (integer, -255..255; default not set' in out
+        assert "brightness (integer, the camera's own range; default not set" in out
+        assert 'autoexposure (bool, true or false; default not set' in out
         assert "pixel_format (string, auto or mjpeg or yuyv; default 'auto')" in out
     else:
         assert 'web_port (integer, 0..65535; default 8080)' in out
@@ -86,7 +87,8 @@ def test_parameters_have_their_real_type_and_range(launch, peer):
     assert values[0].type == ParameterType.PARAMETER_DOUBLE and values[0].double_value == 15.0
     assert values[1].type == ParameterType.PARAMETER_INTEGER and values[1].integer_value == 320
     assert values[2].type == ParameterType.PARAMETER_STRING
-    assert values[5].type == ParameterType.PARAMETER_NOT_SET  # the camera's own brightness
+    # A camera control: the synthetic camera's own value, type and range.
+    assert values[5].type == ParameterType.PARAMETER_INTEGER and values[5].integer_value == 0
     framerate, width, device, quality, frame_id, brightness = describe_parameters(
         peer, 'usbcam_publisher', names)
     assert framerate.type == ParameterType.PARAMETER_DOUBLE
@@ -96,20 +98,20 @@ def test_parameters_have_their_real_type_and_range(launch, peer):
     assert (quality.integer_range[0].from_value, quality.integer_range[0].to_value) == (1, 100)
     assert width.read_only and device.read_only
     assert not quality.read_only and not frame_id.read_only and not brightness.read_only
-    # Not set: no type until set, then an integer within the range.
-    assert brightness.dynamic_typing and brightness.integer_range[0].to_value == 255
+    assert (brightness.integer_range[0].from_value, brightness.integer_range[0].to_value) == \
+        (-64, 64)
     assert framerate.description and quality.description
 
 
-def test_a_dumped_not_set_control_loads_back_as_not_set(launch, peer, tmp_path):
-    # What `ros2 param dump` writes for a control left at the camera's own value.
+def test_a_dumped_null_control_leaves_the_cameras_own_value(launch, peer, tmp_path):
+    # What older versions' `ros2 param dump` wrote for a control left at the camera's value.
     dump = tmp_path / 'dump.yaml'
     dump.write_text('usbcam_publisher:\n  ros__parameters:\n    brightness: null\n'
                     '    contrast: 40\n    video_device: synthetic\n')
     node = launch('usbcam_publisher', extra_args=['--params-file', str(dump)])
     node.wait_for_output('opened synthetic', 20)
     brightness, contrast = get_parameters(peer, 'usbcam_publisher', ['brightness', 'contrast'])
-    assert brightness.type == ParameterType.PARAMETER_NOT_SET
+    assert brightness.type == ParameterType.PARAMETER_INTEGER and brightness.integer_value == 0
     assert contrast.integer_value == 40
 
 

@@ -16,15 +16,18 @@
 config/params.yaml against the installed nodes, through their ROS parameter services.
 
 The file must hold every parameter each node declares, and nothing else, with the node's
-default; a parameter that is not set by default (a camera control) is there as a commented-out
-example line. Started with `--params-file`, a node must run with exactly the file's values.
-Both checks are driven by what the nodes declare, so a new parameter without its line in the
-file fails here, naming it.
+default. A camera's controls are the camera's own (the publisher declares them once the camera
+is open): the file has usb_cam's control names as commented-out example lines, and each must be
+a control of the synthetic camera. Started with `--params-file`, a node must run with exactly
+the file's values, the examples set. Both checks are driven by what the nodes declare, so a new
+parameter without its line in the file fails here, naming it.
 """
 
 import re
 import time
 
+from param_client import describe_parameters
+from py_vision.capture import USB_CAM_ALIASES
 import pytest
 from rclpy.parameter import parameter_value_to_python
 from rclpy.parameter_client import AsyncParameterClient
@@ -38,7 +41,7 @@ RUN_HERE = {
     'usbcam_subscriber': {'display': 'none', 'web_port': 0},
     'cv_bridge_test': {'web_port': 0},
 }
-# A parameter not set by default: `    # name: example value` in its node's section.
+# A camera control example: `    # name: example value` in its node's section.
 UNSET_LINE = re.compile(r'^    # ([a-z_]+): (\S.*)$', re.MULTILINE)
 SECTION = re.compile(r'^([a-z_]+):\n(.*?)(?=^\S|\Z)', re.MULTILINE | re.DOTALL)
 START_TIMEOUT_S = 30.0
@@ -107,18 +110,25 @@ def test_the_file_has_a_section_for_every_installed_executable():
 def test_the_file_holds_every_declared_parameter_with_its_default(launch, peer, node):
     proc = launch(node, params=RUN_HERE[node])
     declared = running_parameters(peer, proc, node)
+    descriptors = describe_parameters(peer, node, list(declared))
+    camera = {d.name for d in descriptors
+              if d.additional_constraints.startswith('camera control')}
+    own = {name: value for name, value in declared.items() if name not in camera}
     values = dict(file_sections()[node], **RUN_HERE[node])
-    unset = unset_examples().get(node, {})
-    missing = sorted(set(declared) - set(values) - set(unset))
-    extra = sorted((set(values) | set(unset)) - set(declared))
+    examples = unset_examples().get(node, {})
+    missing = sorted(set(own) - set(values))
+    extra = sorted(set(values) - set(own))
     assert not missing, '%s declares %s, missing in params.yaml: add with the default' % (
         node, missing)
     assert not extra, 'params.yaml has %s, which %s does not declare' % (extra, node)
-    assert typed({name: value for name, value in declared.items() if name in values}) == \
-        typed(values), 'the defaults of %s (left) differ from params.yaml (right)' % node
-    not_set = sorted(name for name, value in declared.items() if value is None)
-    assert not_set == sorted(unset), \
-        'only parameters not set by default may be commented out in params.yaml'
+    assert typed(own) == typed(values), \
+        'the defaults of %s (left) differ from params.yaml (right)' % node
+    if node == 'usbcam_publisher':
+        assert sorted(examples) == sorted(USB_CAM_ALIASES), \
+            "params.yaml's control examples are usb_cam's names"
+        assert set(examples) <= camera, 'every usb_cam name is a synthetic camera control'
+    else:
+        assert not examples and not camera
 
 
 @pytest.mark.parametrize('node', sorted(RUN_HERE))
@@ -134,4 +144,7 @@ def test_a_node_runs_with_exactly_the_values_of_its_params_file(launch, peer, no
     params_file = tmp_path / 'params.yaml'
     params_file.write_text(yaml.safe_dump(content))
     proc = launch(node, extra_args=['--params-file', str(params_file)])
-    assert typed(running_parameters(peer, proc, node)) == typed(parameters)
+    running = running_parameters(peer, proc, node)
+    # A camera's own controls are parameters too: the file's are those it names.
+    assert typed({name: running[name] for name in parameters if name in running}) == \
+        typed(parameters)

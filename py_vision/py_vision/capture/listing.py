@@ -1,0 +1,96 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+What a device offers, as text: `usbcam_publisher --list-formats`.
+
+Asks the device itself (V4L2 ioctls, or the synthetic camera's model, or the file's own size),
+without streaming and without ROS: each pixel format with its frame sizes and rates, then the
+controls with their ranges, menus and values.
+"""
+
+import os
+from typing import List
+
+import cv2
+from py_vision.capture.camera import open_source
+from py_vision.capture.controls import ControlInfo
+from py_vision.capture.source import FrameFormat, SourceError
+from py_vision.capture.synthetic_device import is_synthetic_spec, SyntheticDevices
+from py_vision.capture.v4l2 import V4L2Device, V4L2Error
+
+__all__ = ['device_listing']
+
+
+def _rates(rates) -> str:
+    return ', '.join('%g' % rate for rate in rates) + ' fps'
+
+
+def _format_lines(listed: FrameFormat) -> List[str]:
+    lines = ['%s (%s)' % (listed.fourcc, listed.description)]
+    if listed.size_range:
+        low_w, low_h, high_w, high_h = listed.size_range
+        lines.append('  any size from %dx%d to %dx%d, e.g.:' % (low_w, low_h, high_w, high_h))
+    for size in listed.sizes:
+        rates = _rates(size.rates) if size.rates else 'rate not listed'
+        lines.append('  %dx%d: %s' % (size.width, size.height, rates))
+    if listed.rate_range:
+        lines.append('  any rate from %g to %g fps' % listed.rate_range)
+    return lines
+
+
+def _control_lines(controls: List[ControlInfo]) -> List[str]:
+    if not controls:
+        return ['controls: none']
+    return ['controls (parameters of usbcam_publisher):'] + [
+        '  ' + control.summary() for control in controls]
+
+
+def device_listing(video_device: str) -> str:
+    """Return what video_device offers, as lines of text; SourceError (one line) if it can't."""
+    device = str(video_device)
+    if is_synthetic_spec(device):
+        source = open_source(device, 640, 480, 30.0, synthetic=SyntheticDevices())
+        try:
+            lines = ['%s: the synthetic camera (USB 2.0, a scaler)' % device]
+            for listed in source.formats():
+                lines += _format_lines(listed)
+            lines += _control_lines(source.controls())
+        finally:
+            source.release()
+        return '\n'.join(lines) + '\n'
+    path = '/dev/video%d' % int(device) if device.strip().isdigit() else os.path.realpath(device)
+    if os.path.isfile(path):
+        source = open_source(device, 0, 0, 0)
+        try:
+            return '%s: a video file, %dx%d at %g fps (no formats or controls to choose)\n' % (
+                device, source.get(cv2.CAP_PROP_FRAME_WIDTH),
+                source.get(cv2.CAP_PROP_FRAME_HEIGHT), source.get(cv2.CAP_PROP_FPS))
+        finally:
+            source.release()
+    if not os.path.exists(path):
+        raise SourceError('cannot open video_device "%s": no such device or file' % device)
+    try:
+        with V4L2Device(path) as opened:
+            where = device if path == device else '%s (%s)' % (device, path)
+            lines = ['%s: %s, driver %s, %s' % (where, opened.card, opened.driver,
+                                                opened.bus_info)]
+            for listed in opened.formats():
+                lines += _format_lines(listed)
+            lines += _control_lines(opened.controls())
+    except V4L2Error as error:
+        raise SourceError('cannot open video_device "%s": %s' % (device, error.reason)) \
+            from None
+    return '\n'.join(lines) + '\n'
