@@ -146,6 +146,8 @@ def run(node_class, args=None):
     built = False
     status = 0
     try:
+        # A node class may build a variant of itself chosen by its parameters (variant()).
+        node_class = getattr(node_class, 'variant', lambda: node_class)()
         # The object exists before its __init__ (which opens devices and ports) so that an
         # interrupted start-up can still be cleaned up.
         node = node_class.__new__(node_class)

@@ -31,9 +31,11 @@ import cv2
 from py_vision import dds
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
 from py_vision.camera import Camera, CONTROL_NAMES, PIXEL_FORMATS, SourceError
+from py_vision.camera_diagnostics import camera_status, CaptureCounters
 from py_vision.cv_bridge import CvBridge
+from py_vision.diagnostics import Diagnostics, Recent
 from py_vision.node_main import ConfigError, main_for
-from py_vision.params import Parameters, Spec
+from py_vision.params import Parameters, read_given, Spec
 from py_vision.qos import publisher_qos, RELIABILITY
 from py_vision.transport import ImagePublisher, sibling_topic
 import rclpy
@@ -49,6 +51,9 @@ LOST_AFTER_FAILED_READS = 5
 REOPEN_BACKOFF_S = (0.25, 0.5, 1.0, 2.0, 4.0)
 REOPEN_LOG_PERIOD_S = 5.0
 IMAGE_TOPIC = 'usb_camera/image'
+MANAGED = Spec('managed', False, 'run as a lifecycle node: configure opens the camera, activate '
+               'publishes, deactivate stops streaming, cleanup releases the camera '
+               '(ros2 lifecycle set)')
 
 
 def _control(name, kind, description, value_range=None):
@@ -101,16 +106,55 @@ class USBImagePublisher(Node):
              'package://pkg/path.yaml; empty: ~/.ros/camera_info/${NAME}.yaml if it exists'),
         Spec('reliability', 'reliable', 'publisher QoS reliability', choices=tuple(RELIABILITY)),
         Spec('depth', 10, 'publisher QoS queue depth', (1, 1000)),
+        MANAGED,
     ) + _CONTROL_SPECS
 
     # What close() finds when start-up was interrupted before these were made.
     camera = None
     _thread = None
     _log_name = NODE_NAME
+    images = None
     frames_captured = raw_published = compressed_published = frames_decoded = 0
+
+    @classmethod
+    def variant(cls):
+        """Return the class to build: the lifecycle node when the parameter managed is true."""
+        if read_given(cls.NODE_NAME, MANAGED):
+            from py_vision.managed_publisher import ManagedPublisher
+            return ManagedPublisher
+        return cls
 
     def __init__(self):
         super().__init__(self.NODE_NAME)
+        self._setup(self._declare_parameters())
+        self._make_publishers()
+        self._open_camera(at_start=True)
+        self._load_calibration()
+        self._start_capture()
+
+    def _declare_parameters(self, errors=None):
+        """
+        Declare every parameter; return their checked values.
+
+        With a list for errors, an unusable value is added to it (and the default used)
+        instead of raising ConfigError.
+        """
+        params = Parameters(self)
+        live = {'jpeg_quality': self._set_jpeg_quality, 'frame_id': self._set_frame_id}
+        live.update({name: self._control_setter(name) for name in CONTROL_NAMES})
+        values = {}
+        for spec in self.PARAMETERS:
+            try:
+                values[spec.name] = params.declare(spec, live.get(spec.name))
+            except ConfigError as error:
+                if errors is None:
+                    raise
+                errors.append(str(error))
+                values[spec.name] = None if spec.optional else spec.default
+        return values
+
+    def _setup(self, values):
+        """Take the parameters' values; make the counters and /diagnostics."""
         # rclpy may be shut down when close() logs (Ctrl-C): a logger that does not publish
         # to /rosout, named after the node's real name.
         self._log_name = self.get_logger().name
@@ -121,38 +165,66 @@ class USBImagePublisher(Node):
         self._stop = threading.Event()
         self._camera_lock = threading.Lock()
         self.camera = None
-        self._controls = {}
-        params = Parameters(self)
-        live = {'jpeg_quality': self._set_jpeg_quality, 'frame_id': self._set_frame_id}
-        live.update({name: self._control_setter(name) for name in CONTROL_NAMES})
-        values = {spec.name: params.declare(spec, live.get(spec.name))
-                  for spec in self.PARAMETERS}
+        self.values = values
         self.video_device = values['video_device']
         self.size = (values['image_width'], values['image_height'])
         self.framerate = values['framerate']
         self.pixel_format = values['pixel_format']
         self.frame_id = values['frame_id']
+        self.jpeg_quality = values['jpeg_quality']
         self._controls = {name: values[name] for name in CONTROL_NAMES
                           if values[name] is not None}
+        self.failed = False
+        self.counters = CaptureCounters()
+        self._recent = Recent()
+        self.diagnostics = Diagnostics(self, hardware_id=self.video_device)
+        self.diagnostics.add('camera', self.camera_status)
 
-        qos = publisher_qos(values['reliability'], values['depth'])
+    def _make_publishers(self):
+        """Create the image, compressed and camera_info publishers."""
+        qos = publisher_qos(self.values['reliability'], self.values['depth'])
         self.images = ImagePublisher(self, IMAGE_TOPIC, qos, CvBridge())
-        self.images.jpeg_quality = values['jpeg_quality']
+        self.images.jpeg_quality = self.jpeg_quality
         self.info_publisher = self.create_publisher(
             CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
+
+    def _load_calibration(self):
+        """Load the calibration; serve set_camera_info."""
+        self.calibration = CameraInfoManager(
+            self.values['camera_name'], self.values['camera_info_url'], self.get_logger())
+        self.calibration.load()
+        self.set_info_service = self.create_service(
+            SetCameraInfo, sibling_topic(self, IMAGE_TOPIC, 'set_camera_info'),
+            self._set_camera_info)
+
+    def _open_camera(self, at_start=False):
+        """Open and negotiate the camera and set the controls; ConfigError if it fails."""
         try:
-            self.camera = self._open()
+            camera = self._open()
         except SourceError as error:
             raise ConfigError(str(error))
-        self.calibration = CameraInfoManager(
-            values['camera_name'], values['camera_info_url'], self.get_logger())
-        self.calibration.load()
-        self.create_service(SetCameraInfo, sibling_topic(self, IMAGE_TOPIC, 'set_camera_info'),
-                            self._set_camera_info)
-        self._apply_controls(self.camera, at_start=True)
-        self.failed = False
+        with self._camera_lock:
+            self.camera = camera
+            self._apply_controls(camera, at_start)
+
+    def _start_capture(self):
+        """Start the capture thread, which publishes every frame and owns the camera."""
+        self._stop.clear()
         self._thread = threading.Thread(target=self._capture_loop, name='capture', daemon=True)
         self._thread.start()
+
+    def camera_status(self):
+        """Return the camera's status on /diagnostics (camera_diagnostics.camera_status)."""
+        subscribers = {}
+        if self.images is not None:
+            for publisher in (self.images.raw, self.images.compressed, self.info_publisher):
+                subscribers[publisher.topic_name] = publisher.get_subscription_count()
+        return camera_status(self.counters, self._recent, self.video_device, self.framerate,
+                             subscribers, self.lifecycle_state())
+
+    def lifecycle_state(self):
+        """Return the lifecycle state of a managed node; None: the plain node, always on."""
+        return None
 
     # --- parameters ------------------------------------------------------------------
 
@@ -160,7 +232,9 @@ class USBImagePublisher(Node):
         self.frame_id = frame_id
 
     def _set_jpeg_quality(self, quality):
-        self.images.jpeg_quality = quality
+        self.jpeg_quality = quality
+        if self.images is not None:
+            self.images.jpeg_quality = quality
 
     def _control_setter(self, name):
         def apply(value):
@@ -210,6 +284,7 @@ class USBImagePublisher(Node):
             self.video_device, camera.describe(), note, self.images.raw.topic_name))
         for line in camera.notes:
             self.get_logger().warning(line)
+        self.counters.opened(camera.pixel_format, camera.width, camera.height, camera.fps)
         return camera
 
     def _capture_loop(self):
@@ -232,6 +307,7 @@ class USBImagePublisher(Node):
                 camera, self.camera = self.camera, None
             if camera is not None:
                 camera.release()
+                self.counters.closed(lost=False)
 
     def _capture(self):
         failed_reads = 0
@@ -250,6 +326,7 @@ class USBImagePublisher(Node):
                 return
             if frame is None:
                 failed_reads += 1
+                self.counters.failed_read()
                 if failed_reads >= LOST_AFTER_FAILED_READS:
                     self.get_logger().warning(
                         'lost %s after %d failed reads; releasing it and reopening' % (
@@ -257,6 +334,7 @@ class USBImagePublisher(Node):
                     with self._camera_lock:
                         self.camera = None
                     camera.release()
+                    self.counters.closed(lost=True)
                     failed_reads = 0
                 continue
             failed_reads = 0
@@ -281,6 +359,9 @@ class USBImagePublisher(Node):
         info.header = header
         self.info_publisher.publish(info)
         self.frames_captured += 1
+        self.counters.frame(frame.index, frame.capture_time)
+        if frame.decoded and frame.bgr() is None:
+            self.counters.corrupt_frame()
         self.raw_published += raw
         self.compressed_published += compressed
 
@@ -302,18 +383,13 @@ class USBImagePublisher(Node):
                 continue
             self.get_logger().info('%s is back after %d attempt(s); publishing resumes' % (
                 self.video_device, attempt))
+            self.counters.reconnected()
             return camera
         return None
 
-    def close(self):
-        """Stop capturing; the capture thread releases the camera."""
-        thread = self._thread
-        logger = get_logger(self._log_name + '.camera')
-        if thread is None:  # start-up was interrupted before capturing began
-            if self.camera is not None:
-                self.camera.release()
-                logger.info('camera released before capturing began')
-            return
+    def _stop_capture(self, logger):
+        """Stop the capture thread, which releases the camera; False if it is still busy."""
+        thread, self._thread = self._thread, None
         self._stop.set()
         camera = self.camera
         if camera is not None:
@@ -321,7 +397,18 @@ class USBImagePublisher(Node):
         thread.join(2.0)
         if thread.is_alive():
             logger.warning('%s is still busy; the system releases it at exit' % self.video_device)
-        else:
+            return False
+        return True
+
+    def close(self):
+        """Stop capturing; the capture thread releases the camera."""
+        logger = get_logger(self._log_name + '.camera')
+        if self._thread is None:  # start-up was interrupted before capturing began
+            if self.camera is not None:
+                self.camera.release()
+                logger.info('camera released before capturing began')
+            return
+        if self._stop_capture(logger):
             logger.info('camera released after %d frames (%d raw, %d compressed published; '
                         '%d JPEG encoded, %d decoded)' % (
                             self.frames_captured, self.raw_published,
