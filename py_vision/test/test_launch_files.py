@@ -184,6 +184,6 @@ def test_managed_camera_is_a_lifecycle_node_driven_to_active():
     (change,) = calls(launch_file.tree, 'ChangeState')
     assert ast.unparse(keyword(change, 'lifecycle_node_matcher')) == 'matches_action(camera)'
     returned = [node for node in ast.walk(launch_file.tree) if isinstance(node, ast.Return)]
-    assert any(ast.unparse(node.value) == "[activate_when_configured, camera, transition("
-               "Transition.TRANSITION_CONFIGURE)]" for node in returned), \
+    assert any(ast.unparse(node.value) == '[activate_when_configured, camera, transition('
+               'Transition.TRANSITION_CONFIGURE)]' for node in returned), \
         'the activating handler is registered before the configure request is emitted'
