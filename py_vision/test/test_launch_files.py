@@ -149,10 +149,18 @@ def test_camera_arguments_reach_the_node_typed_as_its_parameters():
     published = yaml.safe_load((ros_harness.SHARE / 'config' / 'params.yaml').read_text())[
         'usbcam_publisher']['ros__parameters']
     in_file = {name: type(value).__name__ for name, value in published.items()}
-    typed = LaunchFile('camera.launch.py').declared()
+    launch_file = LaunchFile('camera.launch.py')
+    typed = launch_file.declared()
+    # A switch (managed) is declared with the choices true and false.
+    choices = {call.args[0].value: ast.literal_eval(keyword(call, 'choices'))
+               for call in calls(launch_file.tree, 'DeclareLaunchArgument')
+               if isinstance(call.args[0], ast.Constant) and keyword(call, 'choices')}
     for argument, kind in typed.items():
         if argument in in_file:
-            assert kind == in_file[argument], argument
+            if in_file[argument] == 'bool':
+                assert sorted(choices[argument]) == ['false', 'true'], argument
+            else:
+                assert kind == in_file[argument], argument
     assert typed['video_device'] == 'str'
     assert typed['pixel_format'] == 'str'
 
