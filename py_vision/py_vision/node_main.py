@@ -115,7 +115,8 @@ def run(node_class, args=None):
     PUBLISHES (what it publishes, see dds.segment_size); it
     raises ConfigError for problems the user has to fix, has a close() that releases what it
     holds (threads, devices, sockets) and copes with a half-built node, and sets `failed` when
-    it stops because of an error.
+    it stops because of an error. It may have a classmethod variant(), called once rclpy is
+    up, that returns the class to build instead (usbcam_publisher: its lifecycle node).
     """
     argv = list(sys.argv if args is None else args)
     if _wants_help(argv):
