@@ -160,6 +160,20 @@ def test_every_transition_publishes_only_while_active(launch, peer):
     assert 'Traceback' not in node.output()
 
 
+def test_a_camera_lost_while_active_is_reconnected(launch, peer):
+    raw = peer.collect(Image, 'usb_camera/image', RELIABLE)
+    node = launch('usbcam_publisher', dict(
+        CAMERA, video_device='synthetic?stop_after=30&unplugged_for=2'))
+    lifecycle = Lifecycle(peer)
+    assert lifecycle.set(Transition.TRANSITION_CONFIGURE)
+    assert lifecycle.set(Transition.TRANSITION_ACTIVATE)
+    node.wait_for_output(r'WARN.*lost synthetic', 30)
+    count = len(raw)
+    node.wait_for_output(r'is back after \d+ attempt', 30)
+    wait_until(lambda: len(raw) >= count + 5, 30, what='frames after the reconnect')
+    assert lifecycle.get() == 'active'
+
+
 def test_configure_fails_with_the_reason_and_the_node_stays_usable(launch, peer):
     node = launch('usbcam_publisher', dict(CAMERA, video_device='/dev/video_py_vision_missing'))
     lifecycle = Lifecycle(peer)
