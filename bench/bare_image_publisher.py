@@ -25,7 +25,7 @@ import sys
 import time
 
 from bench_common import image_qos, monotonic, StopFlag, write_json
-from py_vision.synthetic_camera import synthetic_frame
+from py_vision.capture.synthetic_picture import synthetic_frame
 import rclpy
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import Image

@@ -27,7 +27,7 @@ import sys
 from bench_common import (announce_first_frame, image_qos, monotonic, StopFlag,
                           write_json)
 import numpy as np
-from py_vision.synthetic_camera import read_frame_index
+from py_vision.capture.synthetic_picture import read_frame_index
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions

@@ -73,24 +73,29 @@ def cpu_ticks(pid):
 
 def one_report(calls):
     """Return the CPU seconds one camera status report costs, built and published."""
-    from py_vision.camera_diagnostics import camera_status, CaptureCounters
-    from py_vision.diagnostics import Diagnostics, Recent
+    from dataclasses import replace
+
+    from py_vision.camera_diagnostics import CameraMonitor
+    from py_vision.capture import CaptureStats
+    from py_vision.diagnostics import Diagnostics
     import rclpy
     context = rclpy.Context()
     domain = ros_harness.DomainId()
     rclpy.init(context=context, domain_id=domain.value)
     node = rclpy.create_node('bench_diagnostics', context=context)
     try:
-        counters = CaptureCounters()
-        counters.opened('yuyv', 640, 480, 30.0)
-        for index in range(90):
-            counters.frame(index, time.monotonic())
-        recent = Recent()
+        monitor = CameraMonitor()
+        stats = [CaptureStats(present=True, streaming=True, pixel_format='yuyv', width=640,
+                              height=480, fps=30.0, measured_fps=29.9)]
         subscribers = {'/usb_camera/image': 1, '/usb_camera/image/compressed': 0,
                        '/usb_camera/camera_info': 1}
+
+        def report():
+            # A new frame count every report, as while streaming: the full status is made.
+            stats[0] = replace(stats[0], frames=stats[0].frames + 30)
+            return monitor.status(stats[0], 'synthetic', 30.0, subscribers)
         diagnostics = Diagnostics(node, hardware_id='synthetic', period_s=3600.0)
-        diagnostics.add('camera', lambda: camera_status(
-            counters, recent, 'synthetic', 30.0, subscribers))
+        diagnostics.add('camera', report)
         diagnostics.publish()  # the first call creates what later ones reuse
         start = time.process_time()
         for _ in range(calls):
@@ -171,8 +176,8 @@ def main():
         options.rounds, off * 100))
     print('| usbcam_publisher with diagnostics (median of %d) | %.2f %% | %.3f |' % (
         options.rounds, on * 100, on / off))
-    print('| difference of the medians | %+.2f %% | %+.3f |' % ((on - off) * 100,
-                                                               (on - off) / off))
+    print('| difference of the medians | %+.2f %% | %+.3f |' % (
+        (on - off) * 100, (on - off) / off))
     print('| one report a second, timed in process | %.3f %% | %.4f |' % (
         report_s * 100, report_s / off))
     print('machine load average (1 min) before and after: %.1f, %.1f on %d CPUs' % (

@@ -106,7 +106,7 @@ class Collector:
 
     def _received(self, msg):
         import numpy as np
-        from py_vision.synthetic_camera import read_frame_index
+        from py_vision.capture.synthetic_picture import read_frame_index
         age = time.time() - (msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
         image = np.frombuffer(bytes(msg.data), np.uint8).reshape(msg.height, msg.width, 3)
         with self._lock:

@@ -32,7 +32,7 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO / 'py_vision'))
 
 from bench_common import save_results  # noqa: E402,I100
-from py_vision import synthetic_camera  # noqa: E402
+from py_vision.capture import synthetic_device, synthetic_picture  # noqa: E402
 
 SIZES = [(640, 480), (1280, 720), (1920, 1080)]
 SAMPLES = 200
@@ -50,6 +50,9 @@ class LateClock:
         self.t += self.step
         return self.t
 
+    def sleep(self, seconds):
+        self.t += seconds
+
 
 def median_us(func):
     func()
@@ -62,19 +65,14 @@ def median_us(func):
 
 
 def unpaced_read_us(width, height):
-    clock = LateClock(30.0)
-    real_now = synthetic_camera._now
-    synthetic_camera._now = clock.now
-    try:
-        cam = synthetic_camera.SyntheticCamera(width, height, 30.0, name='bench')
-        return median_us(cam.read)
-    finally:
-        synthetic_camera._now = real_now
+    devices = synthetic_device.SyntheticDevices(clock=LateClock(30.0))
+    cam = synthetic_device.SyntheticCamera(width, height, 30.0, name='bench', devices=devices)
+    return median_us(cam.read)
 
 
 def paced_cpu_percent(width, height, fps, seconds):
     """Share of one core a loop of paced read() calls uses."""
-    cam = synthetic_camera.SyntheticCamera(width, height, fps, name='bench-paced')
+    cam = synthetic_device.SyntheticCamera(width, height, fps, name='bench-paced')
     cam.read()
     wall, cpu = time.monotonic(), time.process_time()
     frames = 0
@@ -87,15 +85,15 @@ def paced_cpu_percent(width, height, fps, seconds):
 def main():
     rows = []
     for width, height in SIZES:
-        yuyv = synthetic_camera.synthetic_yuyv(1, width, height)
-        frame = synthetic_camera.synthetic_frame(1, width, height)
+        yuyv = synthetic_picture.synthetic_yuyv(1, width, height)
+        frame = synthetic_picture.synthetic_frame(1, width, height)
         times = {
             'cvtColor YUYV->BGR (reference)':
                 median_us(lambda: cv2.cvtColor(yuyv, cv2.COLOR_YUV2BGR_YUYV)),
             'SyntheticCamera.read() without pacing': unpaced_read_us(width, height),
             'synthetic_frame()':
-                median_us(lambda: synthetic_camera.synthetic_frame(7, width, height)),
-            'read_frame_index()': median_us(lambda: synthetic_camera.read_frame_index(frame)),
+                median_us(lambda: synthetic_picture.synthetic_frame(7, width, height)),
+            'read_frame_index()': median_us(lambda: synthetic_picture.read_frame_index(frame)),
         }
         reference = times['cvtColor YUYV->BGR (reference)']
         for name, micros in times.items():

@@ -116,7 +116,7 @@ def run_reference(width, height, fps, out):
     from rclpy.signals import SignalHandlerOptions
     from sensor_msgs.msg import CompressedImage
     from bench_common import monotonic, StopFlag, write_json
-    from py_vision.synthetic_camera import synthetic_jpeg
+    from py_vision.capture.synthetic_picture import synthetic_jpeg
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     stop = StopFlag()
     node = rclpy.create_node('bench_transport_reference')
@@ -142,7 +142,7 @@ def run_camera(width, height, fps, pixel_format, out):
     """Read the synthetic camera alone, as the publisher does: what the camera costs."""
     from bench_common import StopFlag, write_json
     import cv2
-    from py_vision.camera import Camera
+    from py_vision.capture import Camera
     cv2.setNumThreads(1)  # as usbcam_publisher runs it
     stop = StopFlag()
     camera = Camera.open('synthetic', width, height, fps, pixel_format)

@@ -30,7 +30,7 @@ import sys
 from bench_common import announce_first_frame, monotonic, write_json
 import numpy as np
 from py_vision import node_main
-from py_vision.synthetic_camera import read_frame_index
+from py_vision.capture.synthetic_picture import read_frame_index
 from py_vision.usbcam_publisher import USBImagePublisher
 from py_vision.usbcam_subscriber import VideoSubscriber
 from rclpy.time import Time

@@ -33,6 +33,7 @@ other state. /diagnostics is published in every state, with the state in the cam
 Ctrl-C ends the node cleanly in any state (node_main calls close()).
 """
 
+from py_vision.capture import SourceError
 from py_vision.node_main import ConfigError
 from py_vision.usbcam_publisher import USBImagePublisher
 import rclpy
@@ -58,7 +59,6 @@ class ManagedPublisher(LifecycleNodeMixin, USBImagePublisher):
         # Checked at configure: an unusable value fails configure instead of ending the node.
         self._parameter_errors = []
         self._setup(self._declare_parameters(self._parameter_errors))
-        self._controls_checked = False
         self.get_logger().info(
             'managed: unconfigured; waiting for configure (ros2 lifecycle set %s configure)'
             % self.get_fully_qualified_name())
@@ -77,36 +77,36 @@ class ManagedPublisher(LifecycleNodeMixin, USBImagePublisher):
             return FAILURE
         self._make_publishers()
         try:
-            self._open_camera(at_start=not self._controls_checked)
+            self._configure_camera()
         except ConfigError as error:
             self.get_logger().error('configure failed: %s' % error)
             self._release_topics()
             return FAILURE
-        self._controls_checked = True
         self._load_calibration()
         self._state = 'inactive'
         self.get_logger().info('configured: camera open, not streaming')
         return SUCCESS
 
     def on_activate(self, state):
-        """Open the camera again if deactivate released it; start capturing and publishing."""
-        if self.camera is None:
-            try:
-                self._open_camera()
-            except ConfigError as error:
-                self.get_logger().error('activate failed: %s' % error)
-                return FAILURE
-        self._start_capture()
+        """Start capturing and publishing (opening the camera again after a deactivate)."""
+        try:
+            self.capture.start()
+        except SourceError as error:
+            self.get_logger().error('activate failed: %s' % error)
+            return FAILURE
         self._state = 'active'
         self.get_logger().info('activated: publishing on %s' % self.images.raw.topic_name)
         return SUCCESS
 
     def on_deactivate(self, state):
-        """Stop capturing: the device is released and stops streaming; controls are kept."""
-        self._stop_capture(self._close_logger())
+        """Stop capturing and release the device, so that it stops streaming."""
+        # Once OpenCV has started a V4L2 stream only releasing the device stops it (and frees
+        # its USB bandwidth); the controls set stay with the capture loop, which applies them
+        # again when activate opens the device.
+        self._close_camera()
         self._state = 'inactive'
         self.get_logger().info('deactivated: camera released, streaming stopped after %d '
-                               'frames' % self.frames_captured)
+                               'frames' % self.capture.stats().frames)
         return SUCCESS
 
     def on_cleanup(self, state):
@@ -134,16 +134,12 @@ class ManagedPublisher(LifecycleNodeMixin, USBImagePublisher):
 
     # --- releasing -------------------------------------------------------------------
 
-    def _close_logger(self):
-        return get_logger(self._log_name + '.camera')
-
-    def _release_camera(self):
-        with self._camera_lock:
-            camera, self.camera = self.camera, None
-        if camera is not None:
-            camera.release()
-            self.counters.closed(lost=False)
+    def _close_camera(self):
+        """Stop capturing and release the device; False if the capture thread is stuck."""
+        if self.capture.close():
             return True
+        get_logger(self._log_name + '.camera').warning(
+            '%s is still busy; the system releases it at exit' % self.video_device)
         return False
 
     def _release_topics(self):
@@ -158,9 +154,7 @@ class ManagedPublisher(LifecycleNodeMixin, USBImagePublisher):
             self.set_info_service = None
 
     def _release_all(self):
-        if self._thread is not None:
-            self._stop_capture(self._close_logger())
-        self._release_camera()
+        self._close_camera()
         self._release_topics()
 
     def _exit(self):
@@ -169,13 +163,15 @@ class ManagedPublisher(LifecycleNodeMixin, USBImagePublisher):
 
     def close(self):
         """Release whatever this state holds (Ctrl-C, SIGTERM or the end after shutdown)."""
-        logger = self._close_logger()
-        held = self._thread is not None or self.camera is not None
-        if self._thread is not None and not self._stop_capture(logger):
+        capture = self.capture
+        if capture is None:  # start-up was interrupted before the capture loop existed
             return
-        self._release_camera()
+        held = capture.running or capture.camera is not None
+        if not self._close_camera():
+            return
+        logger = get_logger(self._log_name + '.camera')
         if held:
             logger.info('camera released in state %s after %d frames' % (
-                self._state, self.frames_captured))
+                self._state, capture.stats().frames))
         else:
             logger.info('stopped in state %s; no camera was open' % self._state)

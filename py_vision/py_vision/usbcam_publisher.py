@@ -19,21 +19,22 @@ The ROS 2 port of the tutorial's publisher, grown into a driver. Frames are read
 thread (the camera paces itself), stamped with their capture time and published at once: raw
 bgr8 on usb_camera/image, JPEG on usb_camera/image/compressed (the camera's own JPEG untouched
 in MJPEG mode), each only while it has subscribers, and the CameraInfo of every frame on
-usb_camera/camera_info with exactly the image's header. A camera that fails mid-stream is
-released and reopened with back-off; publishing resumes when it is back and the controls the
-user set are applied again. The node is a thin adapter: the camera itself is camera.Camera.
+usb_camera/camera_info with exactly the image's header. The node is a thin adapter: it
+keeps the parameters, publishers and services; opening, reading, losing and reopening the camera
+is the camera layer's CaptureLoop (py_vision.capture), which calls publish_image() with each new
+frame.
 """
 
-import threading
 import time
 
 import cv2
 from py_vision import dds
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
-from py_vision.camera import Camera, CONTROL_NAMES, PIXEL_FORMATS, SourceError
-from py_vision.camera_diagnostics import camera_status, CaptureCounters
+from py_vision.camera_diagnostics import CameraMonitor
+from py_vision.capture import (
+    Camera, CaptureLoop, PIXEL_FORMATS, SourceError, SyntheticDevices, USB_CAM_ALIASES)
 from py_vision.cv_bridge import CvBridge
-from py_vision.diagnostics import Diagnostics, Recent
+from py_vision.diagnostics import Diagnostics
 from py_vision.node_main import ConfigError, main_for
 from py_vision.params import Parameters, read_given, Spec
 from py_vision.qos import publisher_qos, RELIABILITY
@@ -46,10 +47,6 @@ from sensor_msgs.msg import CameraInfo
 from sensor_msgs.srv import SetCameraInfo
 from std_msgs.msg import Header
 
-# Consecutive failed reads after which the device counts as gone (one bad read is noise).
-LOST_AFTER_FAILED_READS = 5
-REOPEN_BACKOFF_S = (0.25, 0.5, 1.0, 2.0, 4.0)
-REOPEN_LOG_PERIOD_S = 5.0
 IMAGE_TOPIC = 'usb_camera/image'
 MANAGED = Spec('managed', False, 'run as a lifecycle node: configure opens the camera, activate '
                'publishes, deactivate stops streaming, cleanup releases the camera '
@@ -110,11 +107,9 @@ class USBImagePublisher(Node):
     ) + _CONTROL_SPECS
 
     # What close() finds when start-up was interrupted before these were made.
-    camera = None
-    _thread = None
+    capture = images = None
     _log_name = NODE_NAME
-    images = None
-    frames_captured = raw_published = compressed_published = frames_decoded = 0
+    raw_published = compressed_published = frames_decoded = 0
 
     @classmethod
     def variant(cls):
@@ -128,9 +123,9 @@ class USBImagePublisher(Node):
         super().__init__(self.NODE_NAME)
         self._setup(self._declare_parameters())
         self._make_publishers()
-        self._open_camera(at_start=True)
+        self._configure_camera()
         self._load_calibration()
-        self._start_capture()
+        self.capture.start()
 
     def _declare_parameters(self, errors=None):
         """
@@ -141,7 +136,7 @@ class USBImagePublisher(Node):
         """
         params = Parameters(self)
         live = {'jpeg_quality': self._set_jpeg_quality, 'frame_id': self._set_frame_id}
-        live.update({name: self._control_setter(name) for name in CONTROL_NAMES})
+        live.update({name: self._control_setter(name) for name in USB_CAM_ALIASES})
         values = {}
         for spec in self.PARAMETERS:
             try:
@@ -154,7 +149,7 @@ class USBImagePublisher(Node):
         return values
 
     def _setup(self, values):
-        """Take the parameters' values; make the counters and /diagnostics."""
+        """Take the parameters' values; make the capture loop (closed) and /diagnostics."""
         # rclpy may be shut down when close() logs (Ctrl-C): a logger that does not publish
         # to /rosout, named after the node's real name.
         self._log_name = self.get_logger().name
@@ -162,9 +157,6 @@ class USBImagePublisher(Node):
         # which spin after every parallel call: one thread halves the capture's CPU
         # (bench/bench_transport.py).
         cv2.setNumThreads(1)
-        self._stop = threading.Event()
-        self._camera_lock = threading.Lock()
-        self.camera = None
         self.values = values
         self.video_device = values['video_device']
         self.size = (values['image_width'], values['image_height'])
@@ -172,11 +164,15 @@ class USBImagePublisher(Node):
         self.pixel_format = values['pixel_format']
         self.frame_id = values['frame_id']
         self.jpeg_quality = values['jpeg_quality']
-        self._controls = {name: values[name] for name in CONTROL_NAMES
-                          if values[name] is not None}
+        self._synthetic = SyntheticDevices()
         self.failed = False
-        self.counters = CaptureCounters()
-        self._recent = Recent()
+        self.capture = CaptureLoop(self._open_camera, self.publish_image,
+                                   self.get_logger(), name=self.video_device,
+                                   on_failure=self._capture_failed)
+        for name in USB_CAM_ALIASES:
+            if values[name] is not None:
+                self.capture.set_control(name, values[name])
+        self._monitor = CameraMonitor()
         self.diagnostics = Diagnostics(self, hardware_id=self.video_device)
         self.diagnostics.add('camera', self.camera_status)
 
@@ -188,6 +184,13 @@ class USBImagePublisher(Node):
         self.info_publisher = self.create_publisher(
             CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
 
+    def _configure_camera(self):
+        """Open and negotiate the camera, with the controls set; ConfigError if it fails."""
+        try:
+            self.capture.open()
+        except SourceError as error:
+            raise ConfigError(str(error))
+
     def _load_calibration(self):
         """Load the calibration; serve set_camera_info."""
         self.calibration = CameraInfoManager(
@@ -197,30 +200,14 @@ class USBImagePublisher(Node):
             SetCameraInfo, sibling_topic(self, IMAGE_TOPIC, 'set_camera_info'),
             self._set_camera_info)
 
-    def _open_camera(self, at_start=False):
-        """Open and negotiate the camera and set the controls; ConfigError if it fails."""
-        try:
-            camera = self._open()
-        except SourceError as error:
-            raise ConfigError(str(error))
-        with self._camera_lock:
-            self.camera = camera
-            self._apply_controls(camera, at_start)
-
-    def _start_capture(self):
-        """Start the capture thread, which publishes every frame and owns the camera."""
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._capture_loop, name='capture', daemon=True)
-        self._thread.start()
-
     def camera_status(self):
-        """Return the camera's status on /diagnostics (camera_diagnostics.camera_status)."""
+        """Return the camera's status on /diagnostics (camera_diagnostics.CameraMonitor)."""
         subscribers = {}
         if self.images is not None:
             for publisher in (self.images.raw, self.images.compressed, self.info_publisher):
                 subscribers[publisher.topic_name] = publisher.get_subscription_count()
-        return camera_status(self.counters, self._recent, self.video_device, self.framerate,
-                             subscribers, self.lifecycle_state())
+        return self._monitor.status(self.capture.stats(), self.video_device, self.framerate,
+                                    subscribers, self.lifecycle_state())
 
     def lifecycle_state(self):
         """Return the lifecycle state of a managed node; None: the plain node, always on."""
@@ -238,30 +225,10 @@ class USBImagePublisher(Node):
 
     def _control_setter(self, name):
         def apply(value):
-            with self._camera_lock:
-                camera = self.camera
-                if camera is None:  # reconnecting: applied when the camera is back
-                    self._controls[name] = value
-                    return None
-                ok, got, message = camera.set_control(name, value)
-            if not ok:
-                return message
-            self._controls[name] = value
-            if message:
-                self.get_logger().info(message)
-            return None
+            if self.capture is None:  # declared before the camera opens: applied at open
+                return None
+            return self.capture.set_control(name, value)
         return apply
-
-    def _apply_controls(self, camera, at_start=False):
-        """Set every control the user gave; one warning for each the camera does not take."""
-        for name, value in list(self._controls.items()):
-            ok, got, message = camera.set_control(name, value)
-            if not ok:
-                self.get_logger().warning("%s; left at the camera's own value" % message)
-                if at_start:
-                    del self._controls[name]
-            elif message:
-                self.get_logger().info(message)
 
     # --- calibration -----------------------------------------------------------------
 
@@ -274,9 +241,10 @@ class USBImagePublisher(Node):
 
     # --- capture ---------------------------------------------------------------------
 
-    def _open(self):
+    def _open_camera(self):
+        """Open the camera the parameters name (called by the capture loop at each (re)open)."""
         camera = Camera.open(self.video_device, self.size[0], self.size[1], self.framerate,
-                             self.pixel_format)
+                             self.pixel_format, synthetic=self._synthetic)
         note = ''
         if (camera.width, camera.height) != self.size:
             note = ' (requested %dx%d; publishing what the device gives)' % self.size
@@ -284,61 +252,19 @@ class USBImagePublisher(Node):
             self.video_device, camera.describe(), note, self.images.raw.topic_name))
         for line in camera.notes:
             self.get_logger().warning(line)
-        self.counters.opened(camera.pixel_format, camera.width, camera.height, camera.fps)
         return camera
 
-    def _capture_loop(self):
-        """Read, stamp and publish frames until close(); the camera belongs to this thread."""
-        try:
-            self._capture()
-        except Exception as error:
-            if self.context.ok():
-                # A device or frame this node cannot handle: say so and end the node.
-                self.get_logger().error('capturing from %s failed: %s: %s' % (
-                    self.video_device, type(error).__name__, error))
-                self.failed = True
-                try:
-                    rclpy.try_shutdown(context=self.context)
-                except Exception:  # a signal shut it down at the same moment
-                    pass
-            # else: Ctrl-C or SIGTERM shut rclpy down while a frame was being published.
-        finally:
-            with self._camera_lock:
-                camera, self.camera = self.camera, None
-            if camera is not None:
-                camera.release()
-                self.counters.closed(lost=False)
-
-    def _capture(self):
-        failed_reads = 0
-        while not self._stop.is_set():
-            camera = self.camera
-            if camera is None:
-                camera = self._reopen()
-                with self._camera_lock:
-                    self.camera = camera
-                    if camera is not None:
-                        self._apply_controls(camera)
-                continue
-            with self._camera_lock:
-                frame = camera.read()
-            if self._stop.is_set():
-                return
-            if frame is None:
-                failed_reads += 1
-                self.counters.failed_read()
-                if failed_reads >= LOST_AFTER_FAILED_READS:
-                    self.get_logger().warning(
-                        'lost %s after %d failed reads; releasing it and reopening' % (
-                            self.video_device, failed_reads))
-                    with self._camera_lock:
-                        self.camera = None
-                    camera.release()
-                    self.counters.closed(lost=True)
-                    failed_reads = 0
-                continue
-            failed_reads = 0
-            self._publish(camera, frame)
+    def _capture_failed(self, error):
+        """Say that a frame could not be published, and end the node."""
+        if self.context.ok():
+            self.get_logger().error('capturing from %s failed: %s: %s' % (
+                self.video_device, type(error).__name__, error))
+            self.failed = True
+            try:
+                rclpy.try_shutdown(context=self.context)
+            except Exception:  # a signal shut it down at the same moment
+                pass
+        # else: Ctrl-C or SIGTERM shut rclpy down while a frame was being published.
 
     def _capture_stamp(self, captured):
         """Return the capture time (time.monotonic(), or None) of a frame as a ROS time."""
@@ -350,7 +276,8 @@ class USBImagePublisher(Node):
             return now
         return Time(nanoseconds=now.nanoseconds - int(age_s * 1e9), clock_type=now.clock_type)
 
-    def _publish(self, camera, frame):
+    def publish_image(self, camera, frame):
+        """Publish one frame: image (raw and compressed, as subscribed) and its CameraInfo."""
         header = Header(stamp=self._capture_stamp(frame.capture_time).to_msg(),
                         frame_id=self.frame_id)
         raw, compressed = self.images.publish(header, frame.bgr, frame.jpeg)
@@ -358,62 +285,26 @@ class USBImagePublisher(Node):
         info = self.calibration.camera_info(camera.width, camera.height)
         info.header = header
         self.info_publisher.publish(info)
-        self.frames_captured += 1
-        self.counters.frame(frame.index, frame.capture_time)
-        if frame.decoded and frame.bgr() is None:
-            self.counters.corrupt_frame()
         self.raw_published += raw
         self.compressed_published += compressed
 
-    def _reopen(self):
-        """Try to reopen the device with back-off until it is back or the node stops."""
-        attempt = 0
-        last_log = 0.0
-        while not self._stop.is_set():
-            delay = REOPEN_BACKOFF_S[min(attempt, len(REOPEN_BACKOFF_S) - 1)]
-            if self._stop.wait(delay):
-                return None
-            attempt += 1
-            try:
-                camera = self._open()
-            except SourceError as error:
-                if time.monotonic() - last_log >= REOPEN_LOG_PERIOD_S:
-                    last_log = time.monotonic()
-                    self.get_logger().warning('reopen attempt %d failed: %s' % (attempt, error))
-                continue
-            self.get_logger().info('%s is back after %d attempt(s); publishing resumes' % (
-                self.video_device, attempt))
-            self.counters.reconnected()
-            return camera
-        return None
-
-    def _stop_capture(self, logger):
-        """Stop the capture thread, which releases the camera; False if it is still busy."""
-        thread, self._thread = self._thread, None
-        self._stop.set()
-        camera = self.camera
-        if camera is not None:
-            camera.interrupt()  # a synthetic camera or a file waiting for its next frame
-        thread.join(2.0)
-        if thread.is_alive():
-            logger.warning('%s is still busy; the system releases it at exit' % self.video_device)
-            return False
-        return True
-
     def close(self):
-        """Stop capturing; the capture thread releases the camera."""
-        logger = get_logger(self._log_name + '.camera')
-        if self._thread is None:  # start-up was interrupted before capturing began
-            if self.camera is not None:
-                self.camera.release()
-                logger.info('camera released before capturing began')
+        """Stop capturing and release the camera."""
+        capture = self.capture
+        if capture is None:  # start-up was interrupted before the camera layer existed
             return
-        if self._stop_capture(logger):
+        logger = get_logger(self._log_name + '.camera')
+        started, opened = capture.running, capture.camera is not None
+        if not capture.close():
+            logger.warning('%s is still busy; the system releases it at exit' % self.video_device)
+        elif started:
             logger.info('camera released after %d frames (%d raw, %d compressed published; '
                         '%d JPEG encoded, %d decoded)' % (
-                            self.frames_captured, self.raw_published,
+                            capture.stats().frames, self.raw_published,
                             self.compressed_published, self.images.encoded,
                             self.frames_decoded))
+        elif opened:
+            logger.info('camera released before capturing began')
 
 
 main = main_for(USBImagePublisher)

@@ -23,7 +23,7 @@ import json
 import sys
 
 import numpy as np
-from py_vision.synthetic_camera import read_frame_index, synthetic_frame
+from py_vision.capture.synthetic_picture import read_frame_index, synthetic_frame
 import rclpy
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Image

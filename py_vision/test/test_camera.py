@@ -16,25 +16,34 @@
 
 import cv2
 import numpy as np
-from py_vision import synthetic_camera
-from py_vision.camera import Camera
-from py_vision.frame_source import query_v4l2_controls, SourceError
-from py_vision.synthetic_camera import (
-    read_frame_index, reset_synthetic_devices, synthetic_frame, synthetic_jpeg, SyntheticCamera)
+from py_vision.capture import Camera as _Camera, SourceError, SyntheticDevices
+from py_vision.capture.synthetic_device import SyntheticCamera
+from py_vision.capture.synthetic_picture import (
+    JPEG_QUALITY, read_frame_index, synthetic_frame, synthetic_jpeg)
+from py_vision.capture.v4l2 import V4L2Device, V4L2Error
 import pytest
 
 
-@pytest.fixture(autouse=True)
-def clock(monkeypatch):
-    """Run the camera's pacing on a fake clock: reads return at once."""
-    now = [1000.0]
+class FakeClock:
+    """Sleeping advances the clock: the camera's pacing returns at once."""
 
-    def sleep(seconds):
-        now[0] += max(seconds, 0.0)
-    monkeypatch.setattr(synthetic_camera, '_now', lambda: now[0])
-    monkeypatch.setattr(synthetic_camera, '_sleep', sleep)
-    reset_synthetic_devices()
-    return now
+    def __init__(self):
+        self.t = 1000.0
+
+    def now(self):
+        return self.t
+
+    def sleep(self, seconds):
+        self.t += max(seconds, 0.0)
+
+
+class Camera:
+    """Camera.open on synthetic devices paced by a fake clock."""
+
+    @staticmethod
+    def open(*args, **kwargs):  # noqa: A003
+        clock = FakeClock()
+        return _Camera.open(*args, synthetic=SyntheticDevices(clock), clock=clock, **kwargs)
 
 
 @pytest.mark.parametrize('width,height,fps,fmt,rate', [
@@ -104,7 +113,7 @@ def test_spliced_mjpeg_is_byte_identical_to_a_whole_frame_encode():
     # The synthetic camera encodes only the code strip per frame; the result must be the
     # same bytes as encoding the whole frame, frame after frame.
     for width, height in ((640, 480), (1280, 720), (1920, 1080), (100, 60)):
-        params = [cv2.IMWRITE_JPEG_QUALITY, synthetic_camera.JPEG_QUALITY,
+        params = [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY,
                   cv2.IMWRITE_JPEG_RST_INTERVAL, (width + 15) // 16]
         for index in (3, 3 + 64, 3 + 128, 70):
             whole = cv2.imencode('.jpg', synthetic_frame(index, width, height), params)[1]
@@ -132,11 +141,12 @@ def mean_bgr(camera):
 def test_controls_change_the_picture_in_the_expected_direction(fmt):
     camera = Camera.open('synthetic', 320, 240, 30.0, fmt)
     base = mean_bgr(camera)
-    assert camera.set_control('brightness', 40) == (True, 40, '')
+    assert camera.set_control('brightness', 40) is None
+    assert camera.values()['brightness'] == 40
     assert mean_bgr(camera).mean() > base.mean() + 20
     camera.set_control('brightness', 0)
     camera.set_control('autoexposure', False)
-    assert camera.set_control('exposure', 400)[0]
+    assert camera.set_control('exposure', 400) is None
     assert mean_bgr(camera).mean() > base.mean() + 10
     camera.set_control('exposure', 166)
     camera.set_control('auto_white_balance', False)
@@ -161,16 +171,35 @@ def test_controls_change_the_picture_in_the_expected_direction(fmt):
     assert edge_energy(blurred) < edge_energy(synthetic_frame(0, 320, 240)) * 0.3
 
 
-def test_controls_are_checked_against_the_cameras_own_ranges():
+def test_controls_are_the_devices_own_and_checked_against_its_ranges():
     camera = Camera.open('synthetic', 320, 240, 30.0, 'yuyv')
-    assert set(camera.controls) == {
-        'brightness', 'contrast', 'saturation', 'sharpness', 'gain', 'auto_white_balance',
-        'white_balance', 'autoexposure', 'exposure', 'autofocus', 'focus'}
-    ok, got, message = camera.set_control('brightness', 200)
-    assert not ok and message == "brightness: 200 is out of the camera's range -64..64"
+    assert {control.name for control in camera.controls()} == {
+        'brightness', 'contrast', 'saturation', 'sharpness', 'gain', 'white_balance_automatic',
+        'white_balance_temperature', 'auto_exposure', 'exposure_time_absolute',
+        'focus_automatic_continuous', 'focus_absolute'}
+    assert camera.set_control('brightness', 200) == \
+        "brightness: 200 is out of the camera's range -64..64"
     assert camera.source.get(cv2.CAP_PROP_BRIGHTNESS) == 0
-    assert camera.set_control('autoexposure', False) == (True, False, '')
-    assert camera.source.get(cv2.CAP_PROP_AUTO_EXPOSURE) == 1  # V4L2's manual mode
+    # usb_cam's switch is a boolean; the device's menu says manual mode is 1.
+    assert camera.set_control('autoexposure', False) is None
+    assert camera.values()['auto_exposure'] == 1
+    assert camera.source.get(cv2.CAP_PROP_AUTO_EXPOSURE) == 1
+    assert camera.set_control('auto_exposure', 2) == \
+        'auto_exposure: 2 is not one of its menu entries (1=Manual Mode; ' \
+        '3=Aperture Priority Mode)'
+
+
+def test_a_control_an_automatic_mode_owns_is_refused_with_the_reason():
+    camera = Camera.open('synthetic', 320, 240, 30.0, 'yuyv')
+    exposure = camera.control('exposure_time_absolute')
+    assert exposure.inactive and exposure.inactive_reason == 'auto_exposure is 3'
+    assert camera.set_control('exposure_time_absolute', 300) == \
+        'exposure_time_absolute is inactive while auto_exposure is 3'
+    assert camera.set_control('exposure', 300) == \
+        'exposure is inactive while auto_exposure is 3'
+    assert camera.set_control('auto_exposure', 1) is None
+    assert camera.set_control('exposure', 300) is None
+    assert camera.values()['exposure_time_absolute'] == 300
 
 
 def test_a_file_has_no_controls_and_says_which(tmp_path):
@@ -180,9 +209,8 @@ def test_a_file_has_no_controls_and_says_which(tmp_path):
         writer.write(np.zeros((48, 64, 3), np.uint8))
     writer.release()
     camera = Camera.open(path, 640, 480, 10.0, 'mjpeg')
-    assert camera.pixel_format == 'file' and camera.controls == {}
-    ok, _, message = camera.set_control('gain', 3)
-    assert not ok and message == '%s has no gain control' % path
+    assert camera.pixel_format == 'file' and camera.controls() == []
+    assert camera.set_control('gain', 3) == '%s has no gain control' % path
 
 
 def test_a_missing_device_is_a_source_error():
@@ -190,9 +218,10 @@ def test_a_missing_device_is_a_source_error():
         Camera.open('/dev/video_py_vision_missing', 640, 480, 10.0)
 
 
-def test_controls_of_something_that_is_not_a_v4l2_device_are_none(tmp_path):
-    # VIDIOC_QUERYCTRL on a file that is not a video device answers nothing, without error.
+def test_something_that_is_not_a_v4l2_device_says_so(tmp_path):
     plain = tmp_path / 'not_a_camera'
     plain.write_bytes(b'')
-    assert query_v4l2_controls(str(plain)) == {}
-    assert query_v4l2_controls(str(tmp_path / 'missing')) == {}
+    with pytest.raises(V4L2Error, match='not a video capture device'):
+        V4L2Device(str(plain))
+    with pytest.raises(V4L2Error, match='no such device'):
+        V4L2Device(str(tmp_path / 'missing'))

@@ -22,7 +22,7 @@ import urllib.request
 import cv2
 import numpy as np
 from param_client import set_parameter
-from py_vision.synthetic_camera import read_frame_index
+from py_vision.capture.synthetic_picture import read_frame_index
 import pytest
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_harness import wait_until

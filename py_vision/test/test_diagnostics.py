@@ -84,7 +84,7 @@ def test_camera_status_goes_ok_error_ok_through_an_unplug(launch, peer):
         name, OK, lambda v: v['device present'] == 'true' and v['reconnects'] == '1')
     # Each wait looks only at statuses after the one before: OK, then ERROR, then OK. Once
     # back, the rate is measured again.
-    ok, values = monitor.wait_for(name, OK, lambda v: v['frame rate'] != '')
+    ok, values = monitor.wait_for(name, OK, lambda v: float(v['frame rate']) > 0)
     assert abs(float(values['frame rate']) - 10.0) <= 1.0
     assert int(values['frames']) > 50
 

@@ -29,7 +29,7 @@ import time
 import cv2
 import numpy as np
 from param_client import set_parameter
-from py_vision.synthetic_camera import read_frame_index, synthetic_frame
+from py_vision.capture.synthetic_picture import read_frame_index, synthetic_frame
 import pytest
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 import ros_harness

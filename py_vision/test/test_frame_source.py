@@ -20,9 +20,11 @@ import sys
 
 import cv2
 import numpy as np
-from py_vision import frame_source, synthetic_camera
-from py_vision.frame_source import open_capture, SourceError, VideoFileSource
-from py_vision.synthetic_camera import read_frame_index, synthetic_frame, SyntheticCamera
+from py_vision.capture import camera as camera_module
+from py_vision.capture import open_source, SourceError, SyntheticDevices
+from py_vision.capture.synthetic_device import SyntheticCamera
+from py_vision.capture.synthetic_picture import read_frame_index, synthetic_frame
+from py_vision.capture.video_file import VideoFileSource
 import pytest
 
 linux_only = pytest.mark.skipif(not sys.platform.startswith('linux'),
@@ -34,6 +36,7 @@ class FakeClock:
 
     def __init__(self):
         self.t = 500.0
+        self.devices = SyntheticDevices(self)
 
     def now(self):
         return self.t
@@ -41,15 +44,14 @@ class FakeClock:
     def sleep(self, seconds):
         self.t += max(0.0, seconds)
 
+    def open(self, video_device, width, height, fps):  # noqa: A003
+        """Open a source whose pacing runs on this clock."""
+        return open_source(video_device, width, height, fps, synthetic=self.devices, clock=self)
+
 
 @pytest.fixture
-def clock(monkeypatch):
-    fake = FakeClock()
-    monkeypatch.setattr(synthetic_camera, '_now', fake.now)
-    monkeypatch.setattr(synthetic_camera, '_sleep', fake.sleep)
-    synthetic_camera.reset_synthetic_devices()
-    yield fake
-    synthetic_camera.reset_synthetic_devices()
+def clock():
+    return FakeClock()
 
 
 @pytest.fixture
@@ -64,9 +66,12 @@ def video(tmp_path):
     return path
 
 
-def open_error(video_device):
+def open_error(video_device, clock=None):
     with pytest.raises(SourceError) as error:
-        open_capture(video_device, 640, 480, 10.0)
+        if clock is None:
+            open_source(video_device, 640, 480, 10.0)
+        else:
+            clock.open(video_device, 640, 480, 10.0)
     message = str(error.value)
     assert '\n' not in message
     assert '"%s"' % video_device in message
@@ -96,7 +101,7 @@ def test_a_file_opencv_cannot_read(tmp_path):
 
 def test_an_unreadable_file_says_permission_denied(tmp_path, monkeypatch, video):
     # Tests may run as root, which reads any file: make the access check say no.
-    monkeypatch.setattr(frame_source.os, 'access', lambda path, mode: False)
+    monkeypatch.setattr(camera_module.os, 'access', lambda path, mode: False)
     assert 'permission denied' in open_error(str(video))
 
 
@@ -104,12 +109,12 @@ def test_an_unreadable_file_says_permission_denied(tmp_path, monkeypatch, video)
 def test_a_device_that_does_not_open_is_one_line_without_opencv_noise(capfd):
     # /dev/null is a character device that exists and is not a camera.
     message = open_error('/dev/null')
-    assert 'does not open' in message
+    assert 'not a video capture device' in message
     assert capfd.readouterr().err == ''
 
 
 def test_synthetic_devices(clock):
-    cap = open_capture('synthetic', 321, 240, 20.0)
+    cap = clock.open('synthetic', 321, 240, 20.0)
     assert isinstance(cap, SyntheticCamera)
     assert (cap.get(cv2.CAP_PROP_FRAME_WIDTH), cap.get(cv2.CAP_PROP_FRAME_HEIGHT)) == (320, 240)
     assert cap.get(cv2.CAP_PROP_FPS) == 20.0
@@ -117,17 +122,17 @@ def test_synthetic_devices(clock):
     assert ok and read_frame_index(frame) == 0
     assert 'fail_open' in open_error('synthetic?fail_open=1')
     assert 'bogus' in open_error('synthetic?bogus=1')
-    assert 'size' in str(pytest.raises(SourceError, open_capture, 'synthetic', 0, 480, 10.0).value)
+    assert 'size' in str(pytest.raises(SourceError, clock.open, 'synthetic', 0, 480, 10.0).value)
 
 
 def test_an_unplugged_synthetic_device_does_not_reopen(clock):
-    cap = open_capture('synthetic?stop_after=1', 160, 120, 10.0)
+    cap = clock.open('synthetic?stop_after=1', 160, 120, 10.0)
     assert cap.read()[0] and not cap.read()[0]
-    assert 'unplugged' in open_error('synthetic?stop_after=1')
+    assert 'unplugged' in open_error('synthetic?stop_after=1', clock)
 
 
 def test_a_video_file_plays_at_its_own_size_and_loops(clock, video):
-    cap = open_capture(str(video), 640, 480, 50.0)
+    cap = clock.open(str(video), 640, 480, 50.0)
     assert isinstance(cap, VideoFileSource) and cap.isOpened()
     # A file is not resized: get() reports what it really is.
     assert (cap.get(cv2.CAP_PROP_FRAME_WIDTH), cap.get(cv2.CAP_PROP_FRAME_HEIGHT)) == (160, 120)
@@ -147,7 +152,7 @@ def test_a_video_file_plays_at_its_own_size_and_loops(clock, video):
 
 
 def test_a_video_file_uses_its_own_rate_when_fps_is_not_positive(clock, video):
-    cap = open_capture(str(video), 640, 480, 0)
+    cap = clock.open(str(video), 640, 480, 0)
     assert cap.get(cv2.CAP_PROP_FPS) == pytest.approx(25.0)
     start = clock.t
     cap.read()
@@ -156,7 +161,7 @@ def test_a_video_file_uses_its_own_rate_when_fps_is_not_positive(clock, video):
 
 
 def test_a_late_reader_does_not_skip_file_frames(clock, video):
-    cap = open_capture(str(video), 640, 480, 25.0)
+    cap = clock.open(str(video), 640, 480, 25.0)
     cap.read()
     clock.t += 1.0
     ok, frame = cap.read()
@@ -168,7 +173,7 @@ def test_a_late_reader_does_not_skip_file_frames(clock, video):
 
 @pytest.mark.parametrize('after', [2, 6])
 def test_reads_fail_once_the_file_is_gone(clock, video, after):
-    cap = open_capture(str(video), 640, 480, 100.0)
+    cap = clock.open(str(video), 640, 480, 100.0)
     for _ in range(after):
         assert cap.read()[0]
     video.unlink()
@@ -178,7 +183,7 @@ def test_reads_fail_once_the_file_is_gone(clock, video, after):
 
 
 def test_a_file_that_becomes_unreadable_at_the_loop_fails(clock, video):
-    cap = open_capture(str(video), 640, 480, 100.0)
+    cap = clock.open(str(video), 640, 480, 100.0)
     for _ in range(6):
         assert cap.read()[0]
     video.write_bytes(b'not a video any more')

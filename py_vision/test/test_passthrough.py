@@ -18,7 +18,7 @@ import signal
 
 import cv2
 import numpy as np
-from py_vision.synthetic_camera import read_frame_index, synthetic_frame
+from py_vision.capture.synthetic_picture import read_frame_index, synthetic_frame
 import pytest
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_harness import wait_until

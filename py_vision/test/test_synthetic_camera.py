@@ -19,11 +19,11 @@ import time
 
 import cv2
 import numpy as np
-from py_vision import synthetic_camera
+from py_vision.capture.synthetic_device import (
+    parse_synthetic_spec, SyntheticCamera, SyntheticDevices, yuyv_max_fps)
+from py_vision.capture.synthetic_picture import (
+    bgr_to_yuyv, read_frame_index, synthetic_frame, synthetic_yuyv)
 from py_vision.cv_bridge import CvBridge
-from py_vision.synthetic_camera import (bgr_to_yuyv, open_synthetic, parse_synthetic_spec,
-                                        read_frame_index, synthetic_frame, synthetic_yuyv,
-                                        SyntheticCamera, yuyv_max_fps)
 import pytest
 
 SIZES = [(160, 120), (640, 480), (1280, 720), (1920, 1080)]
@@ -35,6 +35,7 @@ class FakeClock:
     def __init__(self):
         self.t = 1000.0
         self.slept = 0.0
+        self.devices = SyntheticDevices(self)  # the synthetic devices on this clock
 
     def now(self):
         return self.t
@@ -44,19 +45,9 @@ class FakeClock:
         self.t += max(0.0, seconds)
 
 
-@pytest.fixture(autouse=True)
-def fresh_devices():
-    synthetic_camera.reset_synthetic_devices()
-    yield
-    synthetic_camera.reset_synthetic_devices()
-
-
 @pytest.fixture
-def clock(monkeypatch):
-    fake = FakeClock()
-    monkeypatch.setattr(synthetic_camera, '_now', fake.now)
-    monkeypatch.setattr(synthetic_camera, '_sleep', fake.sleep)
-    return fake
+def clock():
+    return FakeClock()
 
 
 def size_of(cap):
@@ -65,7 +56,7 @@ def size_of(cap):
 
 @pytest.mark.parametrize('width,height', SIZES)
 def test_frames_have_the_requested_size(clock, width, height):
-    cam = SyntheticCamera(width, height, 30.0)
+    cam = SyntheticCamera(width, height, 30.0, devices=clock.devices)
     assert cam.isOpened()
     assert size_of(cam) == (width, height)
     # YUYV, the format it opens in, is limited by the USB 2.0 bus.
@@ -77,7 +68,7 @@ def test_frames_have_the_requested_size(clock, width, height):
 
 
 def test_set_changes_the_size_like_a_driver(clock):
-    cam = SyntheticCamera(640, 480, 10.0)
+    cam = SyntheticCamera(640, 480, 10.0, devices=clock.devices)
     assert cam.set(cv2.CAP_PROP_FRAME_WIDTH, 321)
     assert cam.set(cv2.CAP_PROP_FRAME_HEIGHT, 241)
     # YUYV carries pixel pairs: an odd width is rounded down, and get() tells the truth.
@@ -85,22 +76,22 @@ def test_set_changes_the_size_like_a_driver(clock):
     assert cam.read()[1].shape == (241, 320, 3)
     assert cam.set(cv2.CAP_PROP_FRAME_WIDTH, 1)
     assert cam.get(cv2.CAP_PROP_FRAME_WIDTH) == 2
-    assert SyntheticCamera(641, 480).get(cv2.CAP_PROP_FRAME_WIDTH) == 640
+    assert SyntheticCamera(641, 480, devices=clock.devices).get(cv2.CAP_PROP_FRAME_WIDTH) == 640
 
 
 @pytest.mark.parametrize('value', [0, -4, 8193, 1e9, float('nan'), float('inf')])
 def test_absurd_sizes_are_refused_and_the_size_kept(clock, value):
-    cam = SyntheticCamera(320, 240, 10.0)
+    cam = SyntheticCamera(320, 240, 10.0, devices=clock.devices)
     assert not cam.set(cv2.CAP_PROP_FRAME_WIDTH, value)
     assert not cam.set(cv2.CAP_PROP_FRAME_HEIGHT, value)
     assert size_of(cam) == (320, 240)
     assert cam.read()[1].shape == (240, 320, 3)
     with pytest.raises(ValueError, match='size'):
-        SyntheticCamera(value, 240)
+        SyntheticCamera(value, 240, devices=clock.devices)
 
 
 def test_fps_property_and_refused_properties(clock):
-    cam = SyntheticCamera(160, 120, 10.0)
+    cam = SyntheticCamera(160, 120, 10.0, devices=clock.devices)
     assert cam.set(cv2.CAP_PROP_FPS, 25)
     assert cam.get(cv2.CAP_PROP_FPS) == 25.0
     assert not cam.set(cv2.CAP_PROP_FPS, 0)
@@ -111,11 +102,11 @@ def test_fps_property_and_refused_properties(clock):
     fourcc = int(cam.get(cv2.CAP_PROP_FOURCC))
     assert bytes((fourcc >> s) & 0xFF for s in (0, 8, 16, 24)) == b'YUYV'
     with pytest.raises(ValueError, match='framerate'):
-        SyntheticCamera(160, 120, 0)
+        SyntheticCamera(160, 120, 0, devices=clock.devices)
 
 
 def test_frames_are_paced_at_the_requested_rate(clock):
-    cam = SyntheticCamera(160, 120, 10.0)
+    cam = SyntheticCamera(160, 120, 10.0, devices=clock.devices)
     start = clock.t
     for n in range(5):
         ok, frame = cam.read()
@@ -129,7 +120,7 @@ def test_frames_are_paced_at_the_requested_rate(clock):
 
 
 def test_a_late_reader_gets_the_newest_frame_and_loses_the_others(clock):
-    cam = SyntheticCamera(160, 120, 10.0)
+    cam = SyntheticCamera(160, 120, 10.0, devices=clock.devices)
     start = clock.t
     cam.read()
     clock.t += 0.45  # the caller was busy for four and a half frame periods
@@ -144,7 +135,7 @@ def test_a_late_reader_gets_the_newest_frame_and_loses_the_others(clock):
 
 
 def test_a_size_change_restarts_the_schedule_and_the_sequence_goes_on(clock):
-    cam = SyntheticCamera(160, 120, 10.0)
+    cam = SyntheticCamera(160, 120, 10.0, devices=clock.devices)
     for _ in range(3):
         cam.read()
     clock.t += 0.1
@@ -191,8 +182,8 @@ def test_the_code_blocks_are_pure_black_and_white():
 
 
 def test_content_is_deterministic_and_changes_every_frame(clock):
-    one = SyntheticCamera(640, 480, 10.0, name='one')
-    two = SyntheticCamera(640, 480, 10.0, name='two')
+    one = SyntheticCamera(640, 480, 10.0, name='one', devices=clock.devices)
+    two = SyntheticCamera(640, 480, 10.0, name='two', devices=clock.devices)
     previous = None
     for n in range(4):
         ok1, frame1 = one.read()
@@ -206,7 +197,7 @@ def test_content_is_deterministic_and_changes_every_frame(clock):
 
 
 def test_each_read_returns_a_new_array(clock):
-    cam = SyntheticCamera(320, 240, 10.0)
+    cam = SyntheticCamera(320, 240, 10.0, devices=clock.devices)
     _, first = cam.read()
     kept = first.copy()
     _, second = cam.read()
@@ -215,7 +206,7 @@ def test_each_read_returns_a_new_array(clock):
 
 
 def test_grab_and_retrieve(clock):
-    cam = SyntheticCamera(160, 120, 10.0)
+    cam = SyntheticCamera(160, 120, 10.0, devices=clock.devices)
     assert cam.retrieve() == (False, None)
     assert cam.grab()
     ok, frame = cam.retrieve()
@@ -223,7 +214,7 @@ def test_grab_and_retrieve(clock):
 
 
 def test_release_closes(clock):
-    cam = SyntheticCamera(160, 120, 10.0)
+    cam = SyntheticCamera(160, 120, 10.0, devices=clock.devices)
     cam.release()
     assert not cam.isOpened()
     assert cam.read() == (False, None)
@@ -292,34 +283,34 @@ def test_a_damaged_code_is_rejected():
 
 
 def test_fail_open(clock):
-    cam = SyntheticCamera(fail_open=True)
+    cam = SyntheticCamera(fail_open=True, devices=clock.devices)
     assert not cam.isOpened()
     assert cam.read() == (False, None)
     assert 'fail_open' in cam.error
 
 
 def test_stop_after_unplugs_for_good(clock):
-    cam = open_synthetic('synthetic?stop_after=3', 160, 120, 10.0)
+    cam = clock.devices.open('synthetic?stop_after=3', 160, 120, 10.0)
     assert [cam.read()[0] for _ in range(5)] == [True, True, True, False, False]
     assert cam.isOpened()  # as with V4L2: the device stays open, its reads fail
     assert 'unplugged' in cam.error
     clock.t += 1e6
-    assert not open_synthetic('synthetic?stop_after=3', 160, 120, 10.0).isOpened()
+    assert not clock.devices.open('synthetic?stop_after=3', 160, 120, 10.0).isOpened()
     # Another spec is another device.
-    assert open_synthetic('synthetic', 160, 120, 10.0).read()[0]
+    assert clock.devices.open('synthetic', 160, 120, 10.0).read()[0]
 
 
 def test_unplugged_for_comes_back_after_the_delay(clock):
     spec = 'synthetic?stop_after=3&unplugged_for=2'
-    cam = open_synthetic(spec, 160, 120, 10.0)
+    cam = clock.devices.open(spec, 160, 120, 10.0)
     assert [cam.read()[0] for _ in range(4)] == [True, True, True, False]
     unplugged_at = clock.t
     cam.release()
     clock.t = unplugged_at + 1.9
-    again = open_synthetic(spec, 160, 120, 10.0)
+    again = clock.devices.open(spec, 160, 120, 10.0)
     assert not again.isOpened() and again.read() == (False, None)
     clock.t = unplugged_at + 2.0
-    back = open_synthetic(spec, 160, 120, 10.0)
+    back = clock.devices.open(spec, 160, 120, 10.0)
     assert back.isOpened()
     indices = []
     for _ in range(8):  # more than stop_after: it does not unplug a second time
@@ -331,7 +322,7 @@ def test_unplugged_for_comes_back_after_the_delay(clock):
 
 
 def test_fail_every_fails_single_reads(clock):
-    cam = SyntheticCamera(160, 120, 10.0, fail_every=3)
+    cam = SyntheticCamera(160, 120, 10.0, fail_every=3, devices=clock.devices)
     results = []
     for _ in range(7):
         ok, frame = cam.read()
@@ -348,7 +339,7 @@ def test_spec_strings():
     assert parse_synthetic_spec('synthetic?fail_open=0&stop_after=30&unplugged_for=1.5'
                                 '&fail_every=7') == {'fail_open': False, 'stop_after': 30,
                                                      'unplugged_for': 1.5, 'fail_every': 7}
-    cam = open_synthetic('synthetic?fail_every=2', 321, 240, 15)
+    cam = SyntheticDevices().open('synthetic?fail_every=2', 321, 240, 15)
     assert size_of(cam) == (320, 240) and cam.get(cv2.CAP_PROP_FPS) == 15
 
 
@@ -366,7 +357,7 @@ def test_spec_strings():
 ])
 def test_bad_spec_strings_name_the_problem(spec, words):
     with pytest.raises(ValueError) as error:
-        open_synthetic(spec, 640, 480, 10.0)
+        SyntheticDevices().open(spec, 640, 480, 10.0)
     message = str(error.value)
     for word in words:
         assert word in message

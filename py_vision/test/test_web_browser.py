@@ -26,7 +26,7 @@ import shutil
 
 import cv2
 import numpy as np
-from py_vision.synthetic_camera import read_frame_index
+from py_vision.capture.synthetic_picture import read_frame_index
 import pytest
 from ros_harness import wait_until
 

@@ -26,7 +26,7 @@ import struct
 
 import cv2
 import numpy as np
-from py_vision.synthetic_camera import read_frame_index, synthetic_frame
+from py_vision.capture.synthetic_picture import read_frame_index, synthetic_frame
 from py_vision.web_viewer import WebViewer, WebViewerError
 import pytest
 from ros_harness import wait_until

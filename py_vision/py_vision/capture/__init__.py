@@ -1,0 +1,37 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+The camera layer: frame sources, the device's controls and the capture loop, without ROS.
+
+- `source`: the interface every source has (`FrameSource`), `Frame`, `FrameFormat`, `Clock`;
+- `controls`: the control table (`ControlInfo`, one device control described once) and
+  usb_cam's names for controls (`USB_CAM_ALIASES`);
+- `v4l2`: V4L2 cameras: the device's own ioctls, OpenCV streaming the frames;
+- `video_file`: a video file played as a camera;
+- `synthetic_picture` and `synthetic_device`: the synthetic camera, its picture and the device;
+- `camera`: `Camera`, a source opened and negotiated, with its controls by name;
+- `loop`: `CaptureLoop`, open / read / lose / reopen / close on a thread of its own.
+"""
+
+from py_vision.capture.camera import Camera, open_source, PIXEL_FORMATS
+from py_vision.capture.controls import ControlInfo, USB_CAM_ALIASES
+from py_vision.capture.loop import CaptureLoop, CaptureStats, LoopTiming
+from py_vision.capture.source import Frame, FrameFormat, FrameSize, FrameSource, SourceError
+from py_vision.capture.synthetic_device import SyntheticDevices
+
+__all__ = ['Camera', 'CaptureLoop', 'CaptureStats', 'ControlInfo', 'Frame', 'FrameFormat',
+           'FrameSize', 'FrameSource', 'LoopTiming', 'open_source', 'PIXEL_FORMATS',
+           'SourceError', 'SyntheticDevices', 'USB_CAM_ALIASES']

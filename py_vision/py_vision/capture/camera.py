@@ -1,0 +1,292 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+A camera as usbcam_publisher sees it, without ROS: open with a pixel format, read, control.
+
+`Camera.open()` opens what `video_device` names (`open_source`), negotiates the pixel format
+the camera sends over USB, and says what it really got: size, rate, format, and any request the
+camera refused. In MJPEG mode the camera's own JPEG bytes are kept as they are (OpenCV's
+CAP_PROP_CONVERT_RGB off), so a compressed stream never decodes and re-encodes; `Frame.bgr()`
+decodes only when someone needs the pixels. Controls are the device's own (`ControlInfo`),
+addressed by parameter name or by one of usb_cam's names, and checked against what the device
+reports before they reach it.
+"""
+
+import os
+import stat
+import sys
+from typing import Dict, List, Optional
+
+import cv2
+import numpy as np
+from py_vision.capture.controls import ControlInfo, OWNED_BY, USB_CAM_ALIASES
+from py_vision.capture.opencv_log import silence_opencv
+from py_vision.capture.source import (
+    Clock, Frame, FrameFormat, FrameSource, MONOTONIC, SourceError)
+from py_vision.capture.synthetic_device import is_synthetic_spec, SyntheticDevices
+from py_vision.capture.v4l2 import open_v4l2, V4L2Error, V4L2Source
+from py_vision.capture.video_file import VideoFileSource
+
+__all__ = ['Camera', 'open_source', 'PIXEL_FORMATS']
+
+PIXEL_FORMATS = ('auto', 'mjpeg', 'yuyv')
+_FOURCCS = {'yuyv': float(cv2.VideoWriter_fourcc(*'YUYV')),
+            'mjpeg': float(cv2.VideoWriter_fourcc(*'MJPG'))}
+_FORMAT_NAMES = {value: name for name, value in _FOURCCS.items()}
+# Rates within this fraction of the request count as reached (drivers report 29.97 for 30).
+_RATE_TOLERANCE = 0.02
+
+
+def _request(cap, width, height, fps):
+    cap.set(cv2.CAP_PROP_FRAME_WIDTH, width)
+    cap.set(cv2.CAP_PROP_FRAME_HEIGHT, height)
+    if fps > 0:
+        cap.set(cv2.CAP_PROP_FPS, fps)
+
+
+def _open_camera(video_device, path, target, width, height, fps):
+    """Open a V4L2 device (a path or an index): our own handle, then OpenCV's capture."""
+    backend = cv2.CAP_V4L2 if sys.platform.startswith('linux') else cv2.CAP_ANY
+    try:
+        device, cap = open_v4l2(path, target, lambda what: cv2.VideoCapture(what, backend))
+    except V4L2Error as error:
+        raise SourceError('cannot open video_device "%s": %s' % (video_device, error.reason)) \
+            from None
+    _request(cap, width, height, fps)
+    return V4L2Source(cap, device)
+
+
+def open_source(video_device, width, height, fps, *, synthetic: Optional[SyntheticDevices] = None,
+                clock: Clock = MONOTONIC) -> FrameSource:
+    """
+    Open what `video_device` names and return its FrameSource.
+
+    - ``synthetic`` or ``synthetic?key=value&...``: the synthetic camera (of `synthetic`, the
+      process's synthetic devices; a new set when None);
+    - an integer (``0``): that V4L2 camera, /dev/video<N>;
+    - a character device (``/dev/video0``, ``/dev/v4l/by-id/...``): that V4L2 camera, the
+      link followed now;
+    - a regular file: a VideoFileSource playing it in a loop, in real time (by `clock`).
+
+    Cameras are asked for width, height and fps; read the size they really give with get().
+    Raises SourceError (one line naming the device and the reason) when it does not open.
+    """
+    silence_opencv()
+    device = str(video_device)
+    if is_synthetic_spec(device):
+        devices = synthetic if synthetic is not None else SyntheticDevices(clock)
+        try:
+            cap = devices.open(device, width, height, fps)
+        except ValueError as error:
+            raise SourceError('cannot open video_device "%s": %s' % (device, error)) from None
+        if not cap.isOpened():
+            raise SourceError('cannot open video_device "%s": %s' % (device, cap.error))
+        return cap
+    if device.strip().isdigit():
+        node = '/dev/video%d' % int(device)
+        if not os.path.exists(node):
+            raise SourceError('cannot open video_device "%s": no camera %s (%s does not '
+                              'exist)' % (device, device.strip(), node))
+        return _open_camera(device, node, node, width, height, fps)
+    # A by-id or by-path link names the camera wherever it is plugged: follow it each time.
+    path = os.path.realpath(device)
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise SourceError('cannot open video_device "%s": no such device or file'
+                          % device) from None
+    except OSError as error:
+        raise SourceError('cannot open video_device "%s": %s'
+                          % (device, error.strerror or error)) from None
+    if stat.S_ISCHR(mode):
+        return _open_camera(device, path, path, width, height, fps)
+    if stat.S_ISREG(mode):
+        if not os.access(path, os.R_OK):
+            raise SourceError('cannot open video_device "%s": permission denied' % device)
+        source = VideoFileSource(path, fps, clock)
+        if not source.isOpened():
+            raise SourceError('cannot open video_device "%s": not a video file OpenCV can read'
+                              % device)
+        return source
+    if stat.S_ISDIR(mode):
+        raise SourceError('cannot open video_device "%s": is a directory' % device)
+    raise SourceError('cannot open video_device "%s": neither a video device nor a regular file'
+                      % device)
+
+
+def _is_jpeg(data: np.ndarray) -> bool:
+    """Return True when data is shaped like a whole JPEG: SOI, a marker, ..., EOI."""
+    if data.size < 8 or data[0] != 0xFF or data[1] != 0xD8 or data[2] != 0xFF:
+        return False
+    # A UVC payload may be padded after the EOI marker.
+    end = data.size
+    while end > 2 and data[end - 1] == 0:
+        end -= 1
+    return data[end - 2] == 0xFF and data[end - 1] == 0xD9
+
+
+class Camera:
+    """An opened camera, video file or synthetic camera, with what it really gives."""
+
+    def __init__(self, source: FrameSource, device: str, pixel_format: str,
+                 notes: List[str]):
+        self.source = source
+        self.device = device
+        self.pixel_format = pixel_format   # 'yuyv', 'mjpeg', or 'file'
+        self.notes = notes                 # requests the camera did not grant, in words
+        self.width = int(source.get(cv2.CAP_PROP_FRAME_WIDTH))
+        self.height = int(source.get(cv2.CAP_PROP_FRAME_HEIGHT))
+        self.fps = float(source.get(cv2.CAP_PROP_FPS))
+
+    @classmethod
+    def open(cls, device: str, width: int, height: int, fps: float,  # noqa: A003
+             pixel_format: str = 'auto', *, synthetic: Optional[SyntheticDevices] = None,
+             clock: Clock = MONOTONIC) -> 'Camera':
+        """Open device with the size, rate and pixel format asked for; SourceError if it fails."""
+        if pixel_format not in PIXEL_FORMATS:
+            raise ValueError('pixel_format must be one of %s' % ', '.join(PIXEL_FORMATS))
+        source = open_source(device, width, height, fps, synthetic=synthetic, clock=clock)
+        notes = []
+        if isinstance(source, VideoFileSource):
+            return cls(source, device, 'file', notes)
+        try:
+            chosen = _negotiate(source, device, width, height, fps, pixel_format, notes)
+        except Exception:
+            source.release()
+            raise
+        return cls(source, device, chosen, notes)
+
+    def describe(self) -> str:
+        """Return what the camera gives, for the log line on opening."""
+        what = {'yuyv': 'YUYV', 'mjpeg': 'MJPEG', 'file': 'video file'}[self.pixel_format]
+        return '%dx%d %s at %.4g fps' % (self.width, self.height, what, self.fps)
+
+    def read(self) -> Optional[Frame]:
+        """
+        Wait for the next frame; None when the read failed.
+
+        A frame whose JPEG is not whole (a corrupt USB transfer) comes back with `corrupt` set.
+        """
+        ok, data = self.source.read()
+        if not ok or data is None:
+            return None
+        index = self.source.last_index
+        captured = self.source.last_capture_time
+        if self.pixel_format == 'mjpeg':
+            jpeg = np.ascontiguousarray(data).reshape(-1)
+            return Frame(index, captured, self.width, self.height, jpeg=jpeg,
+                         corrupt=not _is_jpeg(jpeg))
+        whole = data.ndim == 3 and data.shape[2] == 3
+        return Frame(index, captured, data.shape[1] if whole else 0, data.shape[0],
+                     _bgr=data if whole else None, corrupt=not whole)
+
+    def formats(self) -> List[FrameFormat]:
+        """Return the pixel formats, sizes and rates the device offers (none for a file)."""
+        return self.source.formats()
+
+    def controls(self) -> List[ControlInfo]:
+        """Return the device's controls with their current values, and why inactive ones are."""
+        found = self.source.controls()
+        by_id = {control.cid: control for control in found}
+        for position, control in enumerate(found):
+            if control.inactive and not control.inactive_reason and control.cid in OWNED_BY:
+                owner = by_id.get(OWNED_BY[control.cid][0])
+                if owner is not None:
+                    found[position] = control.with_value(
+                        control.value, inactive_reason='%s is %s' % (owner.name, owner.value))
+        return found
+
+    def control(self, name: str) -> Optional[ControlInfo]:
+        """Return the control a parameter name (or usb_cam name) means, or None."""
+        controls = {control.name: control for control in self.controls()}
+        if name in controls:
+            return controls[name]
+        alias = USB_CAM_ALIASES.get(name)
+        if alias is not None:
+            return next((c for c in controls.values() if c.cid == alias.cid), None)
+        return None
+
+    def set_control(self, name: str, value) -> Optional[str]:
+        """
+        Set a control by parameter name or usb_cam name; return None, or why not in words.
+
+        A usb_cam switch (autoexposure, auto_white_balance, autofocus) takes a boolean. The
+        value is checked against what the device reports (read-only, inactive, range, step,
+        menu) before it reaches the device.
+        """
+        control = self.control(name)
+        if control is None:
+            return '%s has no %s control' % (self.device, name)
+        alias = USB_CAM_ALIASES.get(name) if name != control.name else None
+        raw = alias.to_device(value, control) if alias is not None else int(value)
+        reason = control.refusal(raw)
+        if reason is not None:
+            return reason if alias is None else reason.replace(control.name, name, 1)
+        refused = self.source.set_control(control.cid, raw)
+        if refused:
+            return '%s refused %s=%s: %s' % (self.device, name, value, refused)
+        return None
+
+    def values(self) -> Dict[str, object]:
+        """Return every control's current value by parameter name."""
+        return {control.name: control.value for control in self.controls()}
+
+    def interrupt(self) -> None:
+        """End a read() waiting in another thread."""
+        self.source.interrupt()
+
+    def release(self) -> None:
+        """Close the device."""
+        self.source.release()
+
+
+def _try_format(source, name, width, height, fps):
+    """Ask for a pixel format at a size and rate; return (format name or None, rate obtained)."""
+    source.set(cv2.CAP_PROP_FOURCC, _FOURCCS[name])
+    # The camera keeps its JPEG bytes only with OpenCV's conversion off.
+    source.set(cv2.CAP_PROP_CONVERT_RGB, 0 if name == 'mjpeg' else 1)
+    source.set(cv2.CAP_PROP_FRAME_WIDTH, width)
+    source.set(cv2.CAP_PROP_FRAME_HEIGHT, height)
+    source.set(cv2.CAP_PROP_FPS, fps)
+    got = _FORMAT_NAMES.get(source.get(cv2.CAP_PROP_FOURCC))
+    if got is not None:
+        source.set(cv2.CAP_PROP_CONVERT_RGB, 0 if got == 'mjpeg' else 1)
+    return got, source.get(cv2.CAP_PROP_FPS)
+
+
+def _negotiate(source, device, width, height, fps, pixel_format, notes):
+    """Choose the pixel format; return its name and add what was not granted to notes."""
+    wanted = ('yuyv', 'mjpeg') if pixel_format == 'auto' else (pixel_format,)
+    got, rate = _try_format(source, wanted[0], width, height, fps)
+    if pixel_format == 'auto' and (got != 'yuyv' or rate < fps * (1 - _RATE_TOLERANCE)):
+        yuyv_rate = rate if got == 'yuyv' else 0.0
+        got, rate = _try_format(source, 'mjpeg', width, height, fps)
+        if got != 'mjpeg' or rate <= yuyv_rate:
+            got, rate = _try_format(source, 'yuyv', width, height, fps)
+    if got is None:
+        raise SourceError('cannot open video_device "%s": it sends neither YUYV nor MJPEG'
+                          % device)
+    if pixel_format != 'auto' and got != pixel_format:
+        notes.append('the camera refuses pixel_format %s; it gives %s instead' % (
+            pixel_format, got))
+    if rate < fps * (1 - _RATE_TOLERANCE):
+        why = ''
+        if got == 'yuyv':
+            why = ' (YUYV at this size is limited by USB 2.0; pixel_format:=mjpeg or auto ' \
+                  'reaches higher rates)'
+        notes.append('%.4g fps requested, the camera gives %.4g fps in %s%s' % (
+            fps, rate, got.upper(), why))
+    return got

@@ -1,0 +1,320 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+The capture loop: open, read, notice a loss, reopen with back-off, re-apply controls, close.
+
+`CaptureLoop` owns one camera and the thread that reads it; the node gives it a way to open
+the camera and a function to call with each new frame, and drives it through a small
+interface that maps onto a lifecycle node:
+
+===============  ============================================================================
+``open()``       configure: open and negotiate, apply the controls the user set; no streaming
+``start()``      activate: read frames on the capture thread and hand them to ``on_frame``
+``pause()``      deactivate: stop reading; the device stays open with its controls
+``close()``      cleanup: stop reading and release the device
+===============  ============================================================================
+
+A device that fails (reads fail, or no frame for `stall_periods` frame periods: a stall) is
+lost: it is released and reopened with back-off, and the controls set through the loop are
+applied again. Frames captured before the loop (re)started reading are stale and dropped, and
+a corrupt frame is counted and dropped: on_frame sees only new, whole frames. `stats()` gives
+the counters diagnostics report.
+"""
+
+from dataclasses import dataclass, replace
+import threading
+from typing import Callable, Dict, List, Optional, Sequence
+
+from py_vision.capture.camera import Camera
+from py_vision.capture.controls import ControlInfo, OWNED_BY
+from py_vision.capture.source import Clock, Frame, MONOTONIC, SourceError
+
+__all__ = ['CaptureLoop', 'CaptureStats', 'LoopTiming']
+
+
+@dataclass(frozen=True)
+class LoopTiming:
+    """When a device counts as lost and how soon it is tried again."""
+
+    lost_after_failed_reads: int = 5     # one bad read is noise
+    stall_periods: float = 8.0           # no frame for this many frame periods: a stall
+    min_stall_s: float = 1.0             # ... and at least this long (OpenCV's read timeout)
+    first_frame_s: float = 3.0           # a camera may take this long to send its first frame
+    backoff_s: Sequence[float] = (0.25, 0.5, 1.0, 2.0, 4.0)
+    log_period_s: float = 5.0            # failed reopen attempts are logged this often
+
+
+@dataclass(frozen=True)
+class CaptureStats:
+    """What the loop has seen, for diagnostics."""
+
+    frames: int = 0          # new, whole frames handed to on_frame
+    lost: int = 0            # times the device was lost (failed reads, stall, unplug)
+    stalls: int = 0          # ... of which stalls: no frame and no error
+    stale: int = 0           # frames dropped as captured before reading (re)started
+    corrupt: int = 0         # frames dropped as not whole (a corrupt JPEG)
+    reconnects: int = 0      # times the device came back
+    present: bool = False    # the device is open
+    streaming: bool = False  # the capture thread is reading
+    pixel_format: str = ''   # 'yuyv', 'mjpeg', 'file'
+    width: int = 0
+    height: int = 0
+    fps: float = 0.0         # the rate the device was set to
+    measured_fps: float = 0.0  # the rate frames arrived at over the last second or so
+
+
+class CaptureLoop:
+    """
+    One camera read on its own thread, reopened when it is lost.
+
+    `open_camera()` returns an opened Camera or raises SourceError; `on_frame(camera, frame)`
+    publishes a frame (on the capture thread); `logger` has info/warning/error. `clock` and
+    `timing` are for tests. `on_failure(error)` is called when on_frame raises: the loop
+    then stops.
+    """
+
+    def __init__(self, open_camera: Callable[[], Camera],
+                 on_frame: Callable[[Camera, Frame], None], logger, *, name: str = 'camera',
+                 clock: Clock = MONOTONIC, timing: LoopTiming = LoopTiming(),
+                 on_failure: Optional[Callable[[Exception], None]] = None):
+        self._open_camera = open_camera
+        self._on_frame = on_frame
+        self._log = logger
+        self._name = name
+        self._clock = clock
+        self._timing = timing
+        self._on_failure = on_failure
+        self._lock = threading.Lock()      # guards camera and wanted controls
+        self._camera: Optional[Camera] = None
+        self._wanted: Dict[str, object] = {}
+        self._thread: Optional[threading.Thread] = None
+        self._stop = threading.Event()
+        self._stats = CaptureStats()
+        self._not_before = 0.0
+        self._rate_window: List[float] = []
+
+    # --- the interface the node uses ---------------------------------------------------
+
+    @property
+    def camera(self) -> Optional[Camera]:
+        """Return the open camera, or None while it is lost or closed."""
+        return self._camera
+
+    def open(self) -> Camera:  # noqa: A003
+        """Open and negotiate the camera and apply the wanted controls; SourceError if not."""
+        with self._lock:
+            if self._camera is None:
+                self._set_camera(self._open_camera())
+            return self._camera
+
+    def start(self) -> None:
+        """Read frames on the capture thread (opening the camera first if it is closed)."""
+        if self._thread is not None:
+            return
+        self.open()
+        self._stop.clear()
+        self._not_before = self._clock.now()
+        self._thread = threading.Thread(target=self._run, name='capture', daemon=True)
+        self._thread.start()
+        self._update(streaming=True)
+
+    resume = start
+
+    def pause(self, timeout: float = 2.0) -> bool:
+        """Stop reading, keeping the device open; False if the thread did not end in time."""
+        thread, self._thread = self._thread, None
+        if thread is None:
+            return True
+        self._stop.set()
+        camera = self._camera
+        if camera is not None:
+            camera.interrupt()  # a synthetic camera or a file waiting for its next frame
+        thread.join(timeout)
+        self._update(streaming=False)
+        return not thread.is_alive()
+
+    def close(self, timeout: float = 2.0) -> bool:
+        """Stop reading and release the device; False if the thread did not end in time."""
+        ended = self.pause(timeout)
+        if ended:
+            with self._lock:
+                camera, self._camera = self._camera, None
+            if camera is not None:
+                camera.release()
+            self._update(present=False)
+        return ended
+
+    def set_control(self, name: str, value) -> Optional[str]:
+        """
+        Set a control by parameter name or usb_cam name; None when done, else why not.
+
+        While the device is lost the value is kept and applied when it is back; it is
+        applied again after every reconnect.
+        """
+        with self._lock:
+            camera = self._camera
+            if camera is not None:
+                reason = camera.set_control(name, value)
+                if reason:
+                    return reason
+            self._wanted[name] = value
+        return None
+
+    def wanted_controls(self) -> Dict[str, object]:
+        """Return the controls set through the loop (applied again at each reopen)."""
+        return dict(self._wanted)
+
+    def controls(self) -> List[ControlInfo]:
+        """Return the camera's controls with their current values (none while lost)."""
+        with self._lock:
+            camera = self._camera
+            return camera.controls() if camera is not None else []
+
+    def describe(self) -> str:
+        """Return what the camera gives, or that it is not open."""
+        camera = self._camera
+        return camera.describe() if camera is not None else '%s is not open' % self._name
+
+    def stats(self) -> CaptureStats:
+        """Return the counters so far (a snapshot)."""
+        return self._stats
+
+    @property
+    def running(self) -> bool:
+        """Return True while the capture thread runs."""
+        return self._thread is not None and self._thread.is_alive()
+
+    # --- the capture thread ------------------------------------------------------------
+
+    def _set_camera(self, camera: Optional[Camera]) -> None:
+        """Take camera as the current one (lock held): apply the wanted controls to it."""
+        self._camera = camera
+        if camera is None:
+            self._update(present=False)
+            return
+        owners = {owner for owner, _ in OWNED_BY.values()}
+
+        def owner_first(item):
+            control = camera.control(item[0])
+            return 0 if control is not None and control.cid in owners else 1
+        for name, value in sorted(self._wanted.items(), key=owner_first):
+            reason = camera.set_control(name, value)
+            if reason:
+                self._log.warning("%s; left at the camera's own value" % reason)
+        self._update(present=True, pixel_format=camera.pixel_format, width=camera.width,
+                     height=camera.height, fps=camera.fps)
+
+    def _update(self, **changes) -> None:
+        self._stats = replace(self._stats, **changes)
+
+    def _run(self) -> None:
+        try:
+            self._capture()
+        except Exception as error:  # on_frame failed: the node decides what that means
+            if self._on_failure is None:
+                raise
+            self._on_failure(error)
+
+    def _stall_limit(self, camera, first) -> float:
+        limit = max(self._timing.min_stall_s, self._timing.stall_periods / max(camera.fps, 1e-3))
+        return max(limit, self._timing.first_frame_s) if first else limit
+
+    def _capture(self) -> None:
+        failed_reads = 0
+        last_frame = self._clock.now()
+        first = True   # no frame yet from this camera
+        while not self._stop.is_set():
+            camera = self._camera
+            if camera is None:
+                if self._reopen():
+                    last_frame = self._not_before = self._clock.now()
+                    first = True
+                continue
+            frame = camera.read()
+            if self._stop.is_set():
+                return
+            now = self._clock.now()
+            if frame is None:
+                failed_reads += 1
+                stalled = now - last_frame >= self._stall_limit(camera, first)
+                if stalled or failed_reads >= self._timing.lost_after_failed_reads:
+                    self._lose(camera, failed_reads, now - last_frame if stalled else None)
+                    failed_reads = 0
+                continue
+            failed_reads = 0
+            if frame.capture_time is not None and frame.capture_time < self._not_before:
+                self._update(stale=self._stats.stale + 1)
+                continue
+            if frame.corrupt:
+                self._update(corrupt=self._stats.corrupt + 1)
+                if self._stats.corrupt == 1 or self._stats.corrupt % 100 == 0:
+                    self._log.warning('%s sent a corrupt frame (%d so far); skipped' % (
+                        self._name, self._stats.corrupt))
+                continue
+            last_frame, first = now, False
+            self._measure(now)
+            self._on_frame(camera, frame)
+            self._update(frames=self._stats.frames + 1)
+
+    def _measure(self, now) -> None:
+        window = self._rate_window
+        window.append(now)
+        while window and now - window[0] > 1.0:
+            window.pop(0)
+        if len(window) >= 2:
+            self._update(measured_fps=(len(window) - 1) / (window[-1] - window[0]))
+
+    def _lose(self, camera, failed_reads, stalled_s) -> None:
+        if stalled_s is not None:
+            self._log.warning('%s sent no frame for %.1f s (stalled); releasing it and '
+                              'reopening' % (self._name, stalled_s))
+        else:
+            self._log.warning('lost %s after %d failed reads; releasing it and reopening' % (
+                self._name, failed_reads))
+        with self._lock:
+            self._set_camera(None)
+        camera.release()
+        self._update(lost=self._stats.lost + 1, measured_fps=0.0,
+                     stalls=self._stats.stalls + (stalled_s is not None))
+        self._rate_window.clear()
+
+    def _reopen(self) -> bool:
+        """Try to reopen the device with back-off until it is back or the loop stops."""
+        attempt = 0
+        last_log = None
+        backoff = self._timing.backoff_s
+        while not self._stop.is_set():
+            if self._stop.wait(backoff[min(attempt, len(backoff) - 1)]):
+                return False
+            attempt += 1
+            try:
+                camera = self._open_camera()
+            except SourceError as error:
+                now = self._clock.now()
+                if last_log is None or now - last_log >= self._timing.log_period_s:
+                    last_log = now
+                    self._log.warning('reopen attempt %d failed: %s' % (attempt, error))
+                continue
+            with self._lock:
+                if self._stop.is_set():
+                    camera.release()
+                    return False
+                self._set_camera(camera)
+            self._update(reconnects=self._stats.reconnects + 1)
+            self._log.info('%s is back after %d attempt(s); publishing resumes' % (
+                self._name, attempt))
+            return True
+        return False

@@ -1,0 +1,503 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+The synthetic V4L2 device: a camera with OpenCV's VideoCapture interface and no hardware.
+
+`SyntheticCamera` behaves like a USB 2.0 UVC camera seen through OpenCV's V4L2 backend: it
+honours the requested size and frame rate (an odd width is rounded down to even, as YUYV
+needs), builds every frame as a packed YUYV 4:2:2 buffer (synthetic_picture) and converts it
+with ``cv2.COLOR_YUV2BGR_YUYV`` as OpenCV's V4L2 backend does, and paces frames in real time
+with a single buffer: a caller that falls behind gets the newest frame and the frames in between
+are lost (their indices are skipped). read() returns a new array every time.
+
+It offers two pixel formats. YUYV is limited by the bus to 24 MB/s: the highest of 30, 25, 20,
+15, 10 and 5 fps whose ``width * height * 2`` bytes fit (640x480 at 30, 1280x720 at 10,
+1920x1080 at 5 fps). MJPEG runs at the requested rate at any size. The FOURCC is chosen with
+``set(CAP_PROP_FOURCC)`` and, as in OpenCV's V4L2 backend, YUYV is the format a camera opens
+with; with ``CAP_PROP_CONVERT_RGB`` off in MJPEG mode, read() returns the camera's JPEG bytes as
+a 1-D uint8 array, otherwise a BGR image.
+
+Its controls (`CONTROLS`, a ControlInfo table with V4L2 ids and names as uvcvideo reports them)
+are read with controls() and set with set_control() (and, as OpenCV does, through the
+CAP_PROP_* properties), and change the picture visibly and deterministically; as on a UVC
+camera, a control an automatic mode owns is inactive while that mode is on.
+
+Faults for tests, as constructor options or in a ``video_device`` string
+(`SyntheticDevices.open`): ``fail_open`` (never opens), ``stop_after`` (unplugged after N
+frames), ``unplugged_for`` (reopening works again that many seconds after the unplug) and
+``fail_every`` (every K-th read fails while the device stays open); ``formats`` restricts what
+the camera offers (``synthetic?formats=yuyv``, ``mjpeg`` or ``yuyv,mjpeg``). Cameras opened
+through one `SyntheticDevices` with the same name and options share one state: the frame index
+and an unplug carry over to the next camera opened with them. The devices' clock is a
+constructor argument (a fake one in tests).
+"""
+
+import math
+import threading
+from typing import Dict, List, Optional
+from urllib.parse import parse_qsl
+
+import cv2
+import numpy as np
+from py_vision.capture.controls import (
+    BOOL, CID, ControlInfo, EXPOSURE_APERTURE_PRIORITY, EXPOSURE_MANUAL, INT, MENU, OWNED_BY)
+from py_vision.capture.pacing import FramePacer
+from py_vision.capture.source import Clock, FrameFormat, FrameSize, MONOTONIC
+from py_vision.capture.synthetic_picture import (
+    apply_controls, frame_layout, mjpeg_encoder, yuyv_to_bgr)
+
+MAX_SIZE = 8192
+MAX_FPS = 1000.0
+FOURCC_YUYV = float(cv2.VideoWriter_fourcc(*'YUYV'))
+FOURCC_MJPG = float(cv2.VideoWriter_fourcc(*'MJPG'))
+FORMATS = {'yuyv': FOURCC_YUYV, 'mjpeg': FOURCC_MJPG}
+_FORMAT_INFO = {'yuyv': ('YUYV', 'YUYV 4:2:2'), 'mjpeg': ('MJPG', 'Motion-JPEG')}
+# USB 2.0 high speed carries about 24 MB/s of isochronous video; UVC cameras offer these rates.
+BUS_BYTES_PER_S = 24e6
+UVC_RATES = (30.0, 25.0, 20.0, 15.0, 10.0, 5.0)
+# The sizes it lists when asked (it honours any size it is set to, as a scaler would).
+LISTED_SIZES = ((160, 120), (320, 240), (640, 480), (800, 600), (1280, 720), (1920, 1080))
+_OPTIONS = 'fail_open, stop_after, unplugged_for, fail_every, formats'
+
+# The camera's controls, as a UVC camera reports them (V4L2 names, ids, ranges, defaults).
+CONTROLS = (
+    ControlInfo(CID.BRIGHTNESS, 'Brightness', INT, -64, 64, 1, 0),
+    ControlInfo(CID.CONTRAST, 'Contrast', INT, 0, 64, 1, 32),
+    ControlInfo(CID.SATURATION, 'Saturation', INT, 0, 128, 1, 64),
+    ControlInfo(CID.AUTO_WHITE_BALANCE, 'White Balance, Automatic', BOOL, 0, 1, 1, 1),
+    ControlInfo(CID.GAIN, 'Gain', INT, 0, 100, 1, 0),
+    ControlInfo(CID.WHITE_BALANCE_TEMPERATURE, 'White Balance Temperature', INT, 2800, 6500,
+                1, 4600),
+    ControlInfo(CID.SHARPNESS, 'Sharpness', INT, 0, 6, 1, 3),
+    ControlInfo(CID.EXPOSURE_AUTO, 'Auto Exposure', MENU, 0, 3, 1, EXPOSURE_APERTURE_PRIORITY,
+                menu=((EXPOSURE_MANUAL, 'Manual Mode'),
+                      (EXPOSURE_APERTURE_PRIORITY, 'Aperture Priority Mode'))),
+    ControlInfo(CID.EXPOSURE_ABSOLUTE, 'Exposure Time, Absolute', INT, 3, 2047, 1, 166),
+    ControlInfo(CID.FOCUS_ABSOLUTE, 'Focus, Absolute', INT, 0, 250, 1, 0),
+    ControlInfo(CID.FOCUS_AUTO, 'Focus, Automatic Continuous', BOOL, 0, 1, 1, 1),
+)
+_CONTROL_OF = {control.cid: control for control in CONTROLS}
+# OpenCV's V4L2 backend maps these properties onto the controls.
+_PROPS = {
+    cv2.CAP_PROP_BRIGHTNESS: CID.BRIGHTNESS, cv2.CAP_PROP_CONTRAST: CID.CONTRAST,
+    cv2.CAP_PROP_SATURATION: CID.SATURATION, cv2.CAP_PROP_SHARPNESS: CID.SHARPNESS,
+    cv2.CAP_PROP_GAIN: CID.GAIN, cv2.CAP_PROP_AUTO_WB: CID.AUTO_WHITE_BALANCE,
+    cv2.CAP_PROP_WB_TEMPERATURE: CID.WHITE_BALANCE_TEMPERATURE,
+    cv2.CAP_PROP_AUTO_EXPOSURE: CID.EXPOSURE_AUTO, cv2.CAP_PROP_EXPOSURE: CID.EXPOSURE_ABSOLUTE,
+    cv2.CAP_PROP_FOCUS: CID.FOCUS_ABSOLUTE, cv2.CAP_PROP_AUTOFOCUS: CID.FOCUS_AUTO,
+}
+_DEFAULTS = {control.cid: control.default for control in CONTROLS}
+_NEUTRAL = {control.name: control.default for control in CONTROLS}
+
+
+def yuyv_max_fps(width, height):
+    """Return the highest UVC rate at which YUYV frames of this size fit the USB 2.0 bus."""
+    for rate in UVC_RATES:
+        if width * height * 2 * rate <= BUS_BYTES_PER_S:
+            return rate
+    return UVC_RATES[-1]
+
+
+class _DeviceState:
+    """What outlives one SyntheticCamera object: the frame sequence and an unplug."""
+
+    def __init__(self):
+        self.last_index = None
+        self.last_time = None
+        self.unplugged_at = None
+        self.recovered = False
+
+
+class SyntheticDevices:
+    """
+    The synthetic devices of one process (or one test): their clock and their shared state.
+
+    Cameras opened through the same SyntheticDevices with the same name and options continue
+    one frame sequence and see one unplug, as reopening a real device does.
+    """
+
+    def __init__(self, clock: Clock = MONOTONIC):
+        self.clock = clock
+        self._states: Dict[tuple, _DeviceState] = {}
+        self._lock = threading.Lock()
+
+    def state(self, key) -> _DeviceState:
+        """Return the shared state of the device with this name and options."""
+        with self._lock:
+            return self._states.setdefault(key, _DeviceState())
+
+    def open(self, spec, width, height, fps):  # noqa: A003
+        """
+        Open the synthetic camera a video_device string names; ValueError if it is bad.
+
+        The whole string names the device, so reopening it finds the same frame sequence and
+        unplug state.
+        """
+        options = parse_synthetic_spec(spec)
+        return SyntheticCamera(width, height, fps, name=spec, devices=self, **options)
+
+
+def _check_size(value):
+    if not isinstance(value, (int, float, np.integer, np.floating)) or isinstance(value, bool):
+        return None
+    if not math.isfinite(value) or value <= 0 or value > MAX_SIZE:
+        return None
+    return int(value)
+
+
+def _check_fps(value):
+    if not isinstance(value, (int, float, np.integer, np.floating)) or isinstance(value, bool):
+        return None
+    if not math.isfinite(value) or value <= 0 or value > MAX_FPS:
+        return None
+    return float(value)
+
+
+class SyntheticCamera:
+    """
+    A V4L2 camera without hardware, with OpenCV's VideoCapture interface.
+
+    `last_index` is the frame index of the image the last successful read() returned and
+    `last_capture_time` the time.monotonic() at which it was captured (its due time; earlier
+    than the read's return when the caller was late). `error` says why the device is not
+    open, or why its reads fail, or is None. `formats` names the pixel formats it offers
+    (keys of FORMATS); it opens in YUYV where it offers it, as OpenCV's V4L2 backend does.
+    """
+
+    def __init__(self, width=640, height=480, fps=10.0, *, fail_open=False, stop_after=None,
+                 unplugged_for=None, fail_every=None, formats=('yuyv', 'mjpeg'),
+                 name='synthetic', devices: Optional[SyntheticDevices] = None):
+        w, h, rate = _check_size(width), _check_size(height), _check_fps(fps)
+        if w is None or h is None:
+            raise ValueError('image size must be 1..%d pixels each way, got %r x %r'
+                             % (MAX_SIZE, width, height))
+        if rate is None:
+            raise ValueError('framerate must be > 0 and <= %g, got %r' % (MAX_FPS, fps))
+        if stop_after is not None and (int(stop_after) != stop_after or stop_after < 0):
+            raise ValueError('stop_after must be an integer >= 0, got %r' % (stop_after,))
+        if unplugged_for is not None and not (0 <= unplugged_for < math.inf):
+            raise ValueError('unplugged_for must be a number of seconds >= 0, got %r'
+                             % (unplugged_for,))
+        if fail_every is not None and (int(fail_every) != fail_every or fail_every < 1):
+            raise ValueError('fail_every must be an integer >= 1, got %r' % (fail_every,))
+        unknown = [f for f in formats if f not in FORMATS]
+        if unknown or not formats:
+            raise ValueError('formats must be one or more of %s, got %s'
+                             % (', '.join(FORMATS), ','.join(formats) or 'none'))
+        self.name = name
+        self._devices = devices if devices is not None else SyntheticDevices()
+        self._clock = self._devices.clock
+        self.last_index = None
+        self.last_capture_time = None
+        self.error = None
+        self._width, self._height = max(2, w & ~1), h
+        self._offered = [FORMATS[f] for f in FORMATS if f in formats]
+        self._fourcc = self._offered[0]
+        self._convert_rgb = True
+        self._controls = dict(_DEFAULTS)
+        self._requested_fps = rate
+        self._pacer = FramePacer(self._rate(), clock=self._clock)
+        self._stop_after = stop_after
+        self._fail_every = fail_every
+        self._frames = 0
+        self._reads = 0
+        self._base = 0
+        self._grabbed = None
+        self._buf = None
+        self._rendered = None
+        self._state = self._devices.state((name, stop_after, unplugged_for, fail_every,
+                                           tuple(formats)))
+        self._opened = not fail_open
+        if fail_open:
+            self.error = 'the device does not open (fail_open)'
+        elif self._state.unplugged_at is not None and not self._state.recovered:
+            away = self._clock.now() - self._state.unplugged_at
+            if unplugged_for is None or away < unplugged_for:
+                self._opened = False
+                self.error = 'the device is unplugged (stop_after=%d)' % stop_after
+                if unplugged_for is not None:
+                    self.error += ' and back in %.1f s' % (unplugged_for - away)
+            else:
+                self._state.recovered = True
+
+    def isOpened(self):  # noqa: N802 (OpenCV's name)
+        """Return True while the device is open (also after an unplug, as V4L2 does)."""
+        return self._opened
+
+    def release(self):
+        """Close the device; reads fail afterwards."""
+        self._opened = False
+        self._buf = None
+        self._rendered = None
+        self._grabbed = None
+
+    def interrupt(self):
+        """Make the read() waiting for its frame in another thread (or the next) fail now."""
+        self._pacer.cancel()
+
+    def _unplugged(self):
+        if (self._stop_after is None or self._state.recovered
+                or self._frames < self._stop_after):
+            return False
+        if self._state.unplugged_at is None:
+            self._state.unplugged_at = self._clock.now()
+        self.error = 'the device was unplugged after %d frames (stop_after)' % self._stop_after
+        return True
+
+    def grab(self):
+        """Wait for the next frame and capture it; False on a failed read."""
+        self._grabbed = None
+        if not self._opened or self._unplugged():
+            return False
+        starting = not self._pacer.running
+        if not starting:
+            # A sensor's frame exists at its capture time: build the YUYV buffer of the frame
+            # expected next before waiting for it, so only the BGR conversion follows the stamp.
+            self._render(self._base + self._pacer.next)
+        scheduled = self._pacer.wait()
+        if scheduled is None:
+            return False
+        number, due = scheduled
+        if starting:
+            self._base = self._next_index(due)
+        index = self._base + number
+        self._state.last_index, self._state.last_time = index, due
+        self._reads += 1
+        if self._fail_every and self._reads % self._fail_every == 0:
+            return False
+        self._frames += 1
+        self._grabbed = index
+        self.last_index, self.last_capture_time = index, due
+        return True
+
+    def _next_index(self, start):
+        """Index of the first frame of a new schedule: the sequence goes on, gaps included."""
+        state = self._state
+        if state.last_index is None:
+            return 0
+        missed = int(round((start - state.last_time) * self._pacer.fps))
+        return state.last_index + max(1, missed)
+
+    def retrieve(self, image=None, flag=0):
+        """
+        Return the grabbed frame (a new array each call).
+
+        A BGR image, or with CAP_PROP_CONVERT_RGB off the buffer as the camera sent it, as a
+        1-D uint8 array: the JPEG bytes in MJPEG mode, the packed YUYV bytes in YUYV mode.
+        """
+        if self._grabbed is None or not self._opened:
+            return False, None
+        if self._rendered != self._grabbed:
+            self._render(self._grabbed)
+        yuyv = apply_controls(self._buf, {_CONTROL_OF[cid].name: value for cid, value
+                                          in self._controls.items()}, _NEUTRAL)
+        if self._fourcc == FOURCC_YUYV:
+            if self._convert_rgb:
+                return True, yuyv_to_bgr(yuyv)
+            return True, yuyv.reshape(-1).copy()
+        encoder = mjpeg_encoder(self._width, self._height)
+        if yuyv is self._buf:
+            jpeg = encoder.encode(self._grabbed, yuyv)
+        else:  # controls changed the whole picture: no cached rows apply
+            jpeg = encoder.encode_whole(yuyv_to_bgr(yuyv))
+        data = np.frombuffer(jpeg, np.uint8)
+        if self._convert_rgb:
+            return True, cv2.imdecode(data, cv2.IMREAD_COLOR)
+        return True, data.copy()
+
+    def _render(self, index):
+        layout = frame_layout(self._width, self._height)
+        fresh = self._buf is None or self._buf.shape != layout.background.shape
+        if fresh:
+            self._buf = layout.background.copy()
+        layout.render(index, self._buf, fresh)
+        self._rendered = index
+
+    def read(self, image=None):
+        """Grab and retrieve: (True, BGR image) or (False, None)."""
+        if not self.grab():
+            return False, None
+        return self.retrieve()
+
+    def _rate(self):
+        """Return the frame rate the camera gives: YUYV is limited by the bus, MJPEG is not."""
+        if self._fourcc == FOURCC_YUYV:
+            return min(self._requested_fps, yuyv_max_fps(self._width, self._height))
+        return self._requested_fps
+
+    def formats(self) -> List[FrameFormat]:
+        """Return the formats it offers at its listed sizes, with the rates each reaches."""
+        found = []
+        for name in FORMATS:
+            if FORMATS[name] not in self._offered:
+                continue
+            sizes = []
+            for width, height in LISTED_SIZES:
+                top = yuyv_max_fps(width, height) if name == 'yuyv' else UVC_RATES[0]
+                sizes.append(FrameSize(width, height, tuple(r for r in UVC_RATES if r <= top)))
+            found.append(FrameFormat(*_FORMAT_INFO[name], tuple(sizes)))
+        return found
+
+    def controls(self) -> List[ControlInfo]:
+        """Return the camera's controls with their values; owned ones inactive in auto mode."""
+        found = []
+        for control in CONTROLS:
+            inactive = False
+            if control.cid in OWNED_BY:
+                owner, freeing = OWNED_BY[control.cid]
+                inactive = self._controls[owner] not in freeing
+            found.append(control.with_value(self._controls[control.cid], inactive))
+        return found
+
+    def set_control(self, cid: int, value: int) -> Optional[str]:
+        """Set a control as a driver does; return why it was refused, or None."""
+        control = _CONTROL_OF.get(cid)
+        if control is None:
+            return 'the device has no such control'
+        if not self._opened:
+            return 'the device is not open'
+        if not control.minimum <= value <= control.maximum or (
+                control.kind == MENU and value not in dict(control.menu)):
+            return "out of the device's range"
+        self._controls[cid] = int(value)
+        return None
+
+    def set(self, prop_id, value):  # noqa: A003 (OpenCV's name)
+        """
+        Set a property like a V4L2 driver; False for what the camera refuses.
+
+        Width and height (an odd width is rounded down), fps (YUYV is capped by the bus),
+        FOURCC (YUYV or MJPG where offered), CONVERT_RGB and the controls within their range.
+        """
+        if not self._opened:
+            return False
+        prop_id = int(prop_id)
+        if prop_id in _PROPS:
+            if not isinstance(value, (int, float, np.integer, np.floating)) or not (
+                    math.isfinite(value)):
+                return False
+            return self.set_control(_PROPS[prop_id], int(round(value))) is None
+        if prop_id == cv2.CAP_PROP_CONVERT_RGB:
+            self._convert_rgb = bool(value)
+            return True
+        if prop_id == cv2.CAP_PROP_FOURCC:
+            if value not in self._offered:
+                return False
+            changed, self._fourcc = value != self._fourcc, float(value)
+        elif prop_id in (cv2.CAP_PROP_FRAME_WIDTH, cv2.CAP_PROP_FRAME_HEIGHT):
+            size = _check_size(value)
+            if size is None:
+                return False
+            if prop_id == cv2.CAP_PROP_FRAME_WIDTH:
+                size = max(2, size & ~1)
+                changed, self._width = size != self._width, size
+            else:
+                changed, self._height = size != self._height, size
+        elif prop_id == cv2.CAP_PROP_FPS:
+            rate = _check_fps(value)
+            if rate is None:
+                return False
+            changed, self._requested_fps = rate != self._requested_fps, rate
+        else:
+            return False
+        rate = self._rate()
+        if changed or rate != self._pacer.fps:
+            self._pacer.fps = rate
+            self._pacer.restart()
+            self._rendered = None
+        return True
+
+    def get(self, prop_id):
+        """Return the real width, height, fps, next frame index, FOURCC or last capture time."""
+        if not self._opened:
+            return 0.0
+        prop_id = int(prop_id)
+        if prop_id == cv2.CAP_PROP_FRAME_WIDTH:
+            return float(self._width)
+        if prop_id == cv2.CAP_PROP_FRAME_HEIGHT:
+            return float(self._height)
+        if prop_id == cv2.CAP_PROP_FPS:
+            return float(self._pacer.fps)
+        if prop_id == cv2.CAP_PROP_FOURCC:
+            return self._fourcc
+        if prop_id == cv2.CAP_PROP_CONVERT_RGB:
+            return 1.0 if self._convert_rgb else 0.0
+        if prop_id in _PROPS:
+            return float(self._controls[_PROPS[prop_id]])
+        if prop_id == cv2.CAP_PROP_POS_FRAMES:
+            if self._pacer.running:
+                return float(self._base + self._pacer.next)
+            last = self._state.last_index
+            return 0.0 if last is None else float(last + 1)
+        if prop_id == cv2.CAP_PROP_POS_MSEC:
+            return 0.0 if self.last_capture_time is None else self.last_capture_time * 1000.0
+        return 0.0
+
+
+def _parse_bool(key, text):
+    lowered = text.lower()
+    if lowered in ('1', 'true'):
+        return True
+    if lowered in ('0', 'false'):
+        return False
+    raise ValueError('%s must be 0, 1, true or false, got "%s"' % (key, text))
+
+
+def _parse_number(key, text, kind, minimum):
+    try:
+        value = kind(text)
+    except ValueError:
+        value = None
+    if value is None or not math.isfinite(value) or value < minimum:
+        raise ValueError('%s must be %s >= %s, got "%s"'
+                         % (key, 'an integer' if kind is int else 'a number', minimum, text))
+    return value
+
+
+def parse_synthetic_spec(spec):
+    """Return the SyntheticCamera fault options a ``synthetic?key=value&...`` string asks for."""
+    base, _, query = spec.partition('?')
+    if base != 'synthetic':
+        raise ValueError('"%s" is not a synthetic device (synthetic or synthetic?key=value)'
+                         % spec)
+    options = {}
+    for key, value in parse_qsl(query, keep_blank_values=True):
+        if key in options:
+            raise ValueError('option %s is given twice' % key)
+        if key == 'fail_open':
+            options[key] = _parse_bool(key, value)
+        elif key in ('stop_after', 'fail_every'):
+            options[key] = _parse_number(key, value, int, 0 if key == 'stop_after' else 1)
+        elif key == 'unplugged_for':
+            options[key] = _parse_number(key, value, float, 0)
+        elif key == 'formats':
+            options[key] = tuple(f.strip().lower() for f in value.split(',') if f.strip())
+            unknown = [f for f in options[key] if f not in FORMATS]
+            if unknown or not options[key]:
+                raise ValueError('formats must be a comma-separated list of %s, got "%s"'
+                                 % (', '.join(FORMATS), value))
+        else:
+            raise ValueError('unknown option "%s"; use synthetic?key=value&key=value with keys: %s'
+                             % (key, _OPTIONS))
+    if query and not options:
+        raise ValueError('cannot read options "%s"; use key=value&key=value with keys: %s'
+                         % (query, _OPTIONS))
+    return options
+
+
+def is_synthetic_spec(video_device):
+    """Return True if a video_device string names the synthetic source."""
+    return video_device == 'synthetic' or video_device.startswith('synthetic?')

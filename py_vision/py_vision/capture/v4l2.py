@@ -1,0 +1,397 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+V4L2 cameras: the device's own answers through ioctls, and OpenCV streaming the frames.
+
+`V4L2Device` asks the driver directly (fcntl.ioctl, struct layouts of linux/videodev2.h) for
+what OpenCV has no call for: what the device is (QUERYCAP), the pixel formats, frame sizes and
+frame intervals it offers (ENUM_FMT, ENUM_FRAMESIZES, ENUM_FRAMEINTERVALS), and every control
+(QUERY_EXT_CTRL walking V4L2_CTRL_FLAG_NEXT_CTRL, or QUERYCTRL on old drivers; QUERYMENU;
+G_CTRL and S_CTRL). `V4L2Source` is an OpenCV capture of the same device (OpenCV's V4L2
+backend streams the frames) with such a device beside it for everything else.
+"""
+
+import errno
+import fcntl
+import os
+import struct
+import time
+from typing import List, Optional, Tuple
+
+import cv2
+from py_vision.capture.controls import BOOL, ControlInfo, INT, MENU
+from py_vision.capture.source import FrameFormat, FrameSize
+
+__all__ = ['V4L2Device', 'V4L2Error', 'V4L2Source', 'fourcc_text']
+
+
+def _ioc(direction, number, size):
+    return (direction << 30) | (size << 16) | (ord('V') << 8) | number
+
+
+_READ, _READ_WRITE = 2, 3
+# struct v4l2_capability: driver[16] card[32] bus_info[32] version capabilities device_caps
+# reserved[3].
+_CAPABILITY = struct.Struct('=16s32s32sIII12x')
+# struct v4l2_fmtdesc: index type flags description[32] pixelformat mbus_code reserved[3].
+_FMTDESC = struct.Struct('=III32sII12x')
+# struct v4l2_frmsizeenum: index pixel_format type, a union of discrete (width height) or
+# stepwise (min_width max_width step_width min_height max_height step_height), reserved[2].
+_FRMSIZE = struct.Struct('=III6I8x')
+# struct v4l2_frmivalenum: index pixel_format width height type, a union of discrete
+# (numerator denominator) or stepwise (min, max, step fractions), reserved[2].
+_FRMIVAL = struct.Struct('=IIIII6I8x')
+# struct v4l2_query_ext_ctrl: id type name[32] minimum maximum step default_value (64 bit)
+# flags elem_size elems nr_of_dims dims[4] reserved[32].
+_EXT_CTRL = struct.Struct('=II32sqqQqIIII16x128x')
+# struct v4l2_queryctrl: id type name[32] minimum maximum step default_value flags reserved[2].
+_QUERYCTRL = struct.Struct('=II32siiiiI8x')
+# struct v4l2_querymenu (packed): id index, a union of name[32] or an int64 value, reserved.
+_QUERYMENU = struct.Struct('=II32sI')
+# struct v4l2_control: id value.
+_CONTROL = struct.Struct('=Ii')
+# struct v4l2_requestbuffers: count type memory capabilities flags reserved[3].
+_REQBUFS = struct.Struct('=IIIIB3x')
+
+VIDIOC_QUERYCAP = _ioc(_READ, 0, _CAPABILITY.size)
+VIDIOC_ENUM_FMT = _ioc(_READ_WRITE, 2, _FMTDESC.size)
+VIDIOC_REQBUFS = _ioc(_READ_WRITE, 8, _REQBUFS.size)
+VIDIOC_G_CTRL = _ioc(_READ_WRITE, 27, _CONTROL.size)
+VIDIOC_S_CTRL = _ioc(_READ_WRITE, 28, _CONTROL.size)
+VIDIOC_QUERYCTRL = _ioc(_READ_WRITE, 36, _QUERYCTRL.size)
+VIDIOC_QUERYMENU = _ioc(_READ_WRITE, 37, _QUERYMENU.size)
+VIDIOC_ENUM_FRAMESIZES = _ioc(_READ_WRITE, 74, _FRMSIZE.size)
+VIDIOC_ENUM_FRAMEINTERVALS = _ioc(_READ_WRITE, 75, _FRMIVAL.size)
+VIDIOC_QUERY_EXT_CTRL = _ioc(_READ_WRITE, 103, _EXT_CTRL.size)
+
+CAP_VIDEO_CAPTURE = 0x00000001
+CAP_VIDEO_CAPTURE_MPLANE = 0x00001000
+CAP_DEVICE_CAPS = 0x80000000
+BUF_TYPE_VIDEO_CAPTURE = 1
+MEMORY_MMAP = 1
+FRMSIZE_DISCRETE, FRMIVAL_DISCRETE = 1, 1
+CTRL_FLAG_DISABLED = 0x0001
+CTRL_FLAG_READ_ONLY = 0x0004
+CTRL_FLAG_INACTIVE = 0x0010
+CTRL_FLAG_WRITE_ONLY = 0x0040
+CTRL_FLAG_NEXT_CTRL = 0x80000000
+CTRL_FLAG_NEXT_COMPOUND = 0x40000000
+_CTRL_TYPES = {1: INT, 2: BOOL, 3: MENU}   # integer, boolean, menu: what a parameter can be
+_CTRL_CLASS_TYPE = 6
+# A stepwise or continuous size range is offered at these common sizes.
+_COMMON_SIZES = ((160, 120), (320, 240), (640, 480), (800, 600), (1024, 768), (1280, 720),
+                 (1280, 960), (1600, 1200), (1920, 1080), (2560, 1440), (3840, 2160))
+
+
+def fourcc_text(code: int) -> str:
+    """Return a FOURCC code as its four characters: 0x56595559 -> 'YUYV'."""
+    return ''.join(chr((int(code) >> shift) & 0xFF) for shift in (0, 8, 16, 24)).strip('\0 ')
+
+
+def _text(raw: bytes) -> str:
+    return raw.split(b'\0', 1)[0].decode('utf-8', 'replace').strip()
+
+
+class V4L2Error(Exception):
+    """A V4L2 device that cannot be used; `reason` says why in words, `errno` is the cause."""
+
+    def __init__(self, reason: str, code: Optional[int] = None):
+        super().__init__(reason)
+        self.reason = reason
+        self.errno = code
+
+
+def open_problem(code: int) -> str:
+    """Return what an errno from opening or using a video device means to a user."""
+    if code in (errno.EACCES, errno.EPERM):
+        return 'permission denied (add the user to the "video" group: ' \
+               'sudo usermod -aG video $USER, then log in again)'
+    if code == errno.EBUSY:
+        return 'the device is busy (another program is streaming from it)'
+    if code in (errno.ENOENT, errno.ENXIO, errno.ENODEV):
+        return 'no such device (unplugged?)'
+    return os.strerror(code)
+
+
+class V4L2Device:
+    """A V4L2 device opened for its answers (not for streaming): caps, formats, controls."""
+
+    def __init__(self, path: str):
+        self.path = path
+        try:
+            self.fd = os.open(path, os.O_RDWR | os.O_NONBLOCK)
+        except OSError as error:
+            raise V4L2Error(open_problem(error.errno), error.errno) from None
+        try:
+            self.driver, self.card, self.bus_info, caps = self._querycap()
+        except V4L2Error:
+            self.close()
+            raise
+        if not caps & (CAP_VIDEO_CAPTURE | CAP_VIDEO_CAPTURE_MPLANE):
+            self.close()
+            raise V4L2Error('not a video capture device (%s has no capture capability)'
+                            % (self.card or 'it'))
+
+    def _ioctl(self, request, buffer):
+        fcntl.ioctl(self.fd, request, buffer)
+        return buffer
+
+    def _querycap(self):
+        try:
+            data = self._ioctl(VIDIOC_QUERYCAP, bytearray(_CAPABILITY.size))
+        except OSError as error:
+            if error.errno in (errno.ENOTTY, errno.EINVAL):
+                raise V4L2Error('not a video capture device (it does not answer V4L2)',
+                                error.errno) from None
+            raise V4L2Error(open_problem(error.errno), error.errno) from None
+        driver, card, bus, _, caps, device_caps = _CAPABILITY.unpack(data)
+        if caps & CAP_DEVICE_CAPS:
+            caps = device_caps
+        return _text(driver), _text(card), _text(bus), caps
+
+    def close(self) -> None:
+        """Close the device's handle."""
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # --- formats --------------------------------------------------------------------
+
+    def formats(self) -> List[FrameFormat]:
+        """Return each pixel format the device offers with its sizes and rates."""
+        found = []
+        for index in range(64):
+            buffer = bytearray(_FMTDESC.pack(index, BUF_TYPE_VIDEO_CAPTURE, 0, b'', 0, 0))
+            try:
+                self._ioctl(VIDIOC_ENUM_FMT, buffer)
+            except OSError:
+                break
+            _, _, _, description, pixelformat, _ = _FMTDESC.unpack(buffer)
+            found.append(FrameFormat(fourcc_text(pixelformat), _text(description),
+                                     tuple(self._sizes(pixelformat))))
+        return found
+
+    def _sizes(self, pixelformat):
+        sizes = []
+        for index in range(256):
+            buffer = bytearray(_FRMSIZE.pack(index, pixelformat, 0, 0, 0, 0, 0, 0, 0))
+            try:
+                self._ioctl(VIDIOC_ENUM_FRAMESIZES, buffer)
+            except OSError:
+                break
+            _, _, kind, *values = _FRMSIZE.unpack(buffer)
+            if kind == FRMSIZE_DISCRETE:
+                sizes.append((values[0], values[1]))
+                continue
+            low_w, high_w, step_w, low_h, high_h, step_h = values
+            sizes += [(w, h) for w, h in _COMMON_SIZES
+                      if low_w <= w <= high_w and low_h <= h <= high_h
+                      and (w - low_w) % max(step_w, 1) == 0
+                      and (h - low_h) % max(step_h, 1) == 0]
+            break
+        return [FrameSize(w, h, tuple(self._rates(pixelformat, w, h))) for w, h in sizes]
+
+    def _rates(self, pixelformat, width, height):
+        rates = []
+        for index in range(64):
+            buffer = bytearray(_FRMIVAL.pack(index, pixelformat, width, height, 0,
+                                             0, 0, 0, 0, 0, 0))
+            try:
+                self._ioctl(VIDIOC_ENUM_FRAMEINTERVALS, buffer)
+            except OSError:
+                break
+            _, _, _, _, kind, num, den, *stepwise = _FRMIVAL.unpack(buffer)
+            if kind == FRMIVAL_DISCRETE:
+                if num and den:
+                    rates.append(den / num)
+                continue
+            # A range of intervals: its fastest and slowest rates bound what can be asked.
+            max_num, max_den = stepwise[0], stepwise[1]
+            if num and den:
+                rates.append(den / num)
+            if max_num and max_den:
+                rates.append(max_den / max_num)
+            break
+        return sorted(set(rates), reverse=True)
+
+    # --- controls -------------------------------------------------------------------
+
+    def controls(self) -> List[ControlInfo]:
+        """Return every integer, boolean and menu control, with its current value."""
+        try:
+            queried = list(self._walk_ext())
+        except OSError:
+            queried = list(self._walk_old())  # a driver without VIDIOC_QUERY_EXT_CTRL
+        found = []
+        for cid, kind, label, low, high, step, default, flags in queried:
+            if flags & CTRL_FLAG_DISABLED or kind not in _CTRL_TYPES:
+                continue
+            kind = _CTRL_TYPES[kind]
+            menu = tuple(self._menu(cid, low, high)) if kind == MENU else ()
+            value = None
+            if not flags & CTRL_FLAG_WRITE_ONLY:
+                value = self.get_control(cid)
+            found.append(ControlInfo(
+                cid, label, kind, int(low), int(high), max(int(step), 1), int(default), value,
+                menu, read_only=bool(flags & CTRL_FLAG_READ_ONLY),
+                inactive=bool(flags & CTRL_FLAG_INACTIVE)))
+        return found
+
+    def _walk_ext(self):
+        cid = CTRL_FLAG_NEXT_CTRL
+        while True:
+            buffer = bytearray(_EXT_CTRL.size)
+            struct.pack_into('=I', buffer, 0, cid)
+            try:
+                self._ioctl(VIDIOC_QUERY_EXT_CTRL, buffer)
+            except OSError as error:
+                if error.errno == errno.EINVAL and cid != CTRL_FLAG_NEXT_CTRL:
+                    return  # past the last control
+                raise
+            (found, kind, name, low, high, step, default, flags,
+             _, _, _) = _EXT_CTRL.unpack(buffer)
+            if kind != _CTRL_CLASS_TYPE:
+                yield found, kind, _text(name), low, high, step, default, flags
+            cid = found | CTRL_FLAG_NEXT_CTRL
+
+    def _walk_old(self):
+        cid = CTRL_FLAG_NEXT_CTRL
+        while True:
+            buffer = bytearray(_QUERYCTRL.pack(cid, 0, b'', 0, 0, 0, 0, 0))
+            try:
+                self._ioctl(VIDIOC_QUERYCTRL, buffer)
+            except OSError:
+                return
+            found, kind, name, low, high, step, default, flags = _QUERYCTRL.unpack(buffer)
+            if kind != _CTRL_CLASS_TYPE:
+                yield found, kind, _text(name), low, high, step, default, flags
+            cid = found | CTRL_FLAG_NEXT_CTRL
+
+    def _menu(self, cid, low, high):
+        for index in range(int(low), int(high) + 1):
+            buffer = bytearray(_QUERYMENU.pack(cid, index, b'', 0))
+            try:
+                self._ioctl(VIDIOC_QUERYMENU, buffer)
+            except OSError:
+                continue  # a value the menu skips
+            yield index, _text(_QUERYMENU.unpack(buffer)[2])
+
+    def get_control(self, cid: int) -> Optional[int]:
+        """Return a control's current value, or None when the device does not say."""
+        buffer = bytearray(_CONTROL.pack(cid, 0))
+        try:
+            self._ioctl(VIDIOC_G_CTRL, buffer)
+        except OSError:
+            return None
+        return _CONTROL.unpack(buffer)[1]
+
+    def set_control(self, cid: int, value: int) -> Optional[str]:
+        """Set a control; return None, or why the device refused, in words."""
+        try:
+            self._ioctl(VIDIOC_S_CTRL, bytearray(_CONTROL.pack(cid, int(value))))
+        except OSError as error:
+            if error.errno == errno.EACCES:
+                return 'the device refuses it now (read-only or inactive)'
+            if error.errno == errno.ERANGE:
+                return "out of the device's range"
+            return 'the device refused it: %s' % os.strerror(error.errno)
+        return None
+
+    def busy(self) -> bool:
+        """Return True when another handle is streaming from the device (REQBUFS says EBUSY)."""
+        try:
+            self._ioctl(VIDIOC_REQBUFS, bytearray(_REQBUFS.pack(
+                0, BUF_TYPE_VIDEO_CAPTURE, MEMORY_MMAP, 0, 0)))
+        except OSError as error:
+            return error.errno == errno.EBUSY
+        return False
+
+
+class V4L2Source:
+    """A V4L2 camera opened by OpenCV, with the driver's capture times and the device beside."""
+
+    def __init__(self, cap, device: V4L2Device):
+        self._cap = cap
+        self.device = device
+        self.last_index = None
+        self.last_capture_time = None
+
+    def isOpened(self):  # noqa: N802 (OpenCV's name)
+        """Return True while the device is open."""
+        return self._cap.isOpened()
+
+    def read(self):
+        """Read a frame; its capture time is the driver's buffer timestamp when plausible."""
+        ok, frame = self._cap.read()
+        self.last_capture_time = None
+        self.last_index = None
+        if ok:
+            # OpenCV's V4L2 backend gives the buffer's CLOCK_MONOTONIC time in ms here.
+            captured = self._cap.get(cv2.CAP_PROP_POS_MSEC) / 1e3
+            if 0 <= time.monotonic() - captured < 10.0:
+                self.last_capture_time = captured
+        return ok, frame
+
+    def set(self, prop_id, value):  # noqa: A003 (OpenCV's name)
+        """Set an OpenCV capture property; False when the driver refuses."""
+        return bool(self._cap.set(prop_id, value))
+
+    def get(self, prop_id):
+        """Return an OpenCV capture property."""
+        return float(self._cap.get(prop_id))
+
+    def release(self):
+        """Close the device."""
+        self._cap.release()
+        self.device.close()
+
+    def interrupt(self):
+        """Nothing to do: a V4L2 read returns within OpenCV's select() timeout."""
+
+    def formats(self) -> List[FrameFormat]:
+        """Return what the device offers."""
+        return self.device.formats()
+
+    def controls(self) -> List[ControlInfo]:
+        """Return the device's controls with their current values."""
+        return self.device.controls()
+
+    def set_control(self, cid: int, value: int) -> Optional[str]:
+        """Set a device control through the driver."""
+        return self.device.set_control(cid, value)
+
+
+def open_v4l2(path: str, target, open_cap) -> Tuple[V4L2Device, object]:
+    """Open the device for its answers, then OpenCV's capture on it; V4L2Error says why not."""
+    device = V4L2Device(path)
+    try:
+        cap = open_cap(target)
+    except Exception:
+        device.close()
+        raise
+    if not cap.isOpened():
+        cap.release()
+        reason = ('the device is busy (another program is streaming from it)'
+                  if device.busy() else 'OpenCV cannot stream from it')
+        device.close()
+        raise V4L2Error(reason)
+    return device, cap

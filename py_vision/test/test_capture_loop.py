@@ -1,0 +1,183 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""CaptureLoop: losses (failed reads, stalls), reopen, controls re-applied, stale and corrupt."""
+
+import threading
+import time
+
+from py_vision.capture import Camera, CaptureLoop, LoopTiming, SourceError, SyntheticDevices
+from py_vision.capture.source import Frame
+from ros_harness import wait_until
+
+FAST = LoopTiming(backoff_s=(0.01,), stall_periods=3, min_stall_s=0.2, first_frame_s=0.5)
+
+
+class Log:
+    """A logger that keeps its lines."""
+
+    def __init__(self):
+        self.lines = []
+
+    def info(self, text):
+        self.lines.append('INFO ' + text)
+
+    def warning(self, text):
+        self.lines.append('WARN ' + text)
+
+    def error(self, text):
+        self.lines.append('ERROR ' + text)
+
+
+class Device:
+    """Opens the synthetic camera, can be unplugged, stalled or made to send corrupt frames."""
+
+    def __init__(self, fps=100.0):
+        self.fps = fps
+        self.devices = SyntheticDevices()
+        self.present = threading.Event()
+        self.present.set()
+        self.stalled = threading.Event()
+        self.corrupt = threading.Event()
+        self.opened = 0
+
+    def open(self):  # noqa: A003
+        if not self.present.is_set():
+            raise SourceError('cannot open video_device "test": unplugged')
+        camera = Camera.open('synthetic', 160, 120, self.fps, 'mjpeg', synthetic=self.devices)
+        self.opened += 1
+        device, read = self, camera.read
+
+        def read_as_device():
+            if not device.present.is_set():
+                return None
+            if device.stalled.is_set():
+                time.sleep(0.25)   # OpenCV's read times out: no frame, no error
+                return None
+            frame = read()
+            if frame is not None and device.corrupt.is_set():
+                return Frame(frame.index, frame.capture_time, frame.width, frame.height,
+                             jpeg=frame.jpeg[:len(frame.jpeg) // 2], corrupt=True)
+            return frame
+        camera.read = read_as_device
+        return camera
+
+
+def run_loop(device, timing=FAST):
+    frames, log = [], Log()
+    loop = CaptureLoop(device.open, lambda camera, frame: frames.append(frame), log,
+                       name='test', timing=timing)
+    return loop, frames, log
+
+
+def test_frames_flow_and_stats_say_what_the_device_gives():
+    device = Device()
+    loop, frames, log = run_loop(device)
+    loop.start()
+    try:
+        wait_until(lambda: len(frames) >= 20, 10, what='20 frames')
+        stats = loop.stats()
+        assert stats.present and stats.streaming and stats.pixel_format == 'mjpeg'
+        assert (stats.width, stats.height, stats.fps) == (160, 120, 100.0)
+        wait_until(lambda: loop.stats().measured_fps > 50, 10, what='a measured rate')
+    finally:
+        assert loop.close()
+    assert not loop.stats().present and loop.camera is None
+
+
+def test_an_unplug_is_a_loss_the_device_is_reopened_and_controls_applied_again():
+    device = Device()
+    loop, frames, log = run_loop(device)
+    loop.start()
+    try:
+        assert loop.set_control('brightness', 20) is None
+        wait_until(lambda: frames, 10, what='frames')
+        device.present.clear()
+        wait_until(lambda: loop.stats().lost == 1, 10, what='the loss')
+        assert any('lost test after 5 failed reads' in line for line in log.lines)
+        device.present.set()
+        wait_until(lambda: loop.stats().reconnects == 1, 10, what='the reconnect')
+        assert loop.camera.values()['brightness'] == 20
+        count = len(frames)
+        wait_until(lambda: len(frames) > count, 10, what='frames after the reconnect')
+    finally:
+        loop.close()
+
+
+def test_a_stall_is_a_loss_not_a_hang():
+    device = Device()
+    loop, frames, log = run_loop(device)
+    loop.start()
+    try:
+        wait_until(lambda: frames, 10, what='frames')
+        device.stalled.set()
+        wait_until(lambda: loop.stats().stalls == 1, 10, what='the stall noticed')
+        assert any('sent no frame for' in line and 'stalled' in line for line in log.lines)
+        device.stalled.clear()
+        wait_until(lambda: loop.stats().reconnects >= 1, 10, what='the reconnect')
+    finally:
+        loop.close()
+
+
+def test_corrupt_frames_are_counted_and_never_handed_on():
+    device = Device()
+    loop, frames, log = run_loop(device)
+    loop.start()
+    try:
+        wait_until(lambda: frames, 10, what='frames')
+        device.corrupt.set()
+        wait_until(lambda: loop.stats().corrupt >= 5, 10, what='corrupt frames')
+        device.corrupt.clear()
+        count = len(frames)
+        wait_until(lambda: len(frames) > count + 5, 10, what='whole frames again')
+    finally:
+        loop.close()
+    assert not any(frame.corrupt for frame in frames)
+    assert loop.stats().lost == 0  # corrupt frames are not a lost device
+    assert sum('corrupt frame' in line for line in log.lines) == 1
+
+
+def test_pause_keeps_the_device_and_resume_drops_what_was_captured_before():
+    device = Device()
+    loop, frames, log = run_loop(device)
+    camera = loop.open()
+    assert not loop.running and loop.stats().present and frames == []
+    loop.start()
+    wait_until(lambda: frames, 10, what='frames')
+    assert loop.pause()
+    assert loop.camera is camera and loop.stats().present and not loop.stats().streaming
+    assert loop.set_control('contrast', 10) is None
+    paused_at = device.devices.clock.now()
+    frames.clear()
+    loop.resume()
+    wait_until(lambda: len(frames) >= 3, 10, what='frames after resume')
+    loop.close()
+    assert all(frame.capture_time >= paused_at for frame in frames)
+    assert device.opened == 1
+    assert camera.values()['contrast'] == 10
+
+
+def test_a_refused_control_is_said_and_not_kept():
+    device = Device()
+    loop, frames, log = run_loop(device)
+    loop.open()
+    try:
+        assert loop.set_control('brightness', 500) == \
+            "brightness: 500 is out of the camera's range -64..64"
+        assert 'brightness' not in loop.wanted_controls()
+        assert loop.set_control('focus', 10) == \
+            'focus is inactive while focus_automatic_continuous is 1'
+    finally:
+        loop.close()
