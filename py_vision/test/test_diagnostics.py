@@ -137,3 +137,10 @@ def test_cv_bridge_test_warns_when_it_cannot_keep_up(launch, peer):
     assert int(values['skipped']) > 0 and float(values['processing p99 ms']) >= 290
     assert set_parameter(peer, 'cv_bridge_test', 'simulated_work_ms', 0.0).successful
     monitor.wait_for(name, OK, lambda v: float(v['processing p50 ms'] or 1e9) < 100)
+
+
+def test_a_renamed_node_reports_under_its_real_name(launch, peer):
+    monitor = Monitor(peer)
+    launch('usbcam_subscriber', {'display': 'none'}, remaps={'__node': 'front_viewer'})
+    status, _ = monitor.wait_for('front_viewer: stream', WARN)
+    assert not monitor.statuses('usbcam_subscriber: stream')
