@@ -36,6 +36,7 @@ import cv2
 import numpy as np
 from py_vision import dds
 from py_vision.cv_bridge import CvBridge, CvBridgeError
+from py_vision.diagnostics import Diagnostics, OK, Recent, Status, WARN
 from py_vision.display import Display, DISPLAYS
 from py_vision.latest_frame import LatestFrameWorker
 from py_vision.node_main import main_for
@@ -51,6 +52,9 @@ CIRCLE_CENTER, CIRCLE_RADIUS, CIRCLE_BGR = (60, 60), 30, (0, 0, 255)
 ERROR_LOG_PERIOD_S = 5.0
 STATS_PERIOD_S = 5.0
 MAX_SIMULATED_WORK_MS = 10000.0
+# Skipping more than this fraction of the input lately is "cannot keep up" (WARN); a frame
+# skipped now and then on a loaded machine is not.
+SKIPPED_WARN_FRACTION = 0.1
 # One call of the simulated work: short enough to meet its end time and notice a shutdown
 # within a millisecond, long enough that the loop around it costs nothing.
 _WORK_CHUNK = np.ones(65536, np.float32)
@@ -146,6 +150,9 @@ class CvBridgeTest(Node):
         # The panel shows the camera these frames come from, upstream of this node.
         self.display.attach(self, self.stats, self.publisher_.topic_name,
                             camera_topic=self.subscription_.topic_name)
+        self._recent = Recent()
+        self.diagnostics = Diagnostics(self, hardware_id=self.subscription_.topic_name)
+        self.diagnostics.add('processing', self.processing_status)
         self.get_logger().info('drawing on images from %s, publishing them on %s%s' % (
             self.subscription_.topic_name, self.publisher_.topic_name,
             self._work_note(self.simulated_work_s)))
@@ -221,6 +228,30 @@ class CvBridgeTest(Node):
             line += ', output age p50 %.1f ms p99 %.1f ms, %.1f fps out' % (
                 s['age_ms_p50'], s['age_ms_p99'], s['fps'])
         self.get_logger().info('%s on %s' % (line, self.publisher_.topic_name))
+
+    def processing_status(self):
+        """Return the processing step's status for /diagnostics; WARN when it falls behind."""
+        s = self.stats.snapshot()
+        recent = self._recent.update(frames_in=s['frames_in'], skipped=s['skipped'],
+                                     errors=s['errors'])
+        values = {'input': self.subscription_.topic_name, 'output': self.publisher_.topic_name,
+                  'frames in': s['frames_in'], 'processed': s['processed'],
+                  'skipped': s['skipped'], 'not converted': s['errors'],
+                  'processing p50 ms': s['processing_ms_p50'],
+                  'processing p99 ms': s['processing_ms_p99'],
+                  'output age p50 ms': s['age_ms_p50'], 'output age p99 ms': s['age_ms_p99'],
+                  'output rate': float(s['fps']),
+                  'simulated work ms': self.simulated_work_s * 1e3}
+        if recent['frames_in'] and recent['skipped'] > SKIPPED_WARN_FRACTION * recent['frames_in']:
+            return Status(WARN, 'cannot keep up: skipped %d of the last %d frames' % (
+                recent['skipped'], recent['frames_in']), values)
+        if recent['errors']:
+            return Status(WARN, '%d frame(s) could not be converted lately' % recent['errors'],
+                          values)
+        if s['processing_ms_p50'] is None:
+            return Status(OK, 'no frames on %s lately' % self.subscription_.topic_name, values)
+        return Status(OK, 'keeping up: processing p50 %.1f ms' % s['processing_ms_p50'],
+                      values)
 
     def close(self):
         """Stop the worker (abandoning a step in progress), then the window or viewer."""

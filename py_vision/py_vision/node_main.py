@@ -170,7 +170,8 @@ def run(node_class, args=None):
     PUBLISHES (what it publishes, see dds.segment_size); it
     raises ConfigError for problems the user has to fix, has a close() that releases what it
     holds (threads, devices, sockets) and copes with a half-built node, and sets `failed` when
-    it stops because of an error.
+    it stops because of an error. It may have a classmethod variant(), called once rclpy is
+    up, that returns the class to build instead (usbcam_publisher: its lifecycle node).
     """
     argv = list(sys.argv if args is None else args)
     if _wants_help(argv):
@@ -205,6 +206,9 @@ def run(node_class, args=None):
         # The object exists before its __init__ (which opens devices and ports) so that a
         # start-up that fails half-way (ConfigError) can still be cleaned up.
         if _Stopping.signum is None:  # else: stopped before there was anything to build
+            # A node class may build a variant of itself chosen by its parameters
+            # (variant(): usbcam_publisher's managed:=true).
+            node_class = getattr(node_class, 'variant', lambda: node_class)()
             node = node_class.__new__(node_class)
             node.__init__()
             built = True

@@ -31,12 +31,14 @@ import time
 import cv2
 from py_vision import dds
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
+from py_vision.camera_diagnostics import CameraMonitor
 from py_vision.capture import Camera, CaptureLoop, PIXEL_FORMATS, SourceError, SyntheticDevices
 from py_vision.capture.listing import device_listing
 from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
+from py_vision.diagnostics import Diagnostics
 from py_vision.node_main import ConfigError, main_for
-from py_vision.params import Parameters, Spec
+from py_vision.params import Parameters, read_given, Spec
 from py_vision.qos import publisher_qos, RELIABILITY
 from py_vision.transport import ImagePublisher, sibling_topic
 import rclpy
@@ -49,6 +51,9 @@ from std_msgs.msg import Header
 import yaml
 
 IMAGE_TOPIC = 'usb_camera/image'
+MANAGED = Spec('managed', False, 'run as a lifecycle node: configure opens the camera, activate '
+               'publishes, deactivate stops streaming, cleanup releases the camera '
+               '(ros2 lifecycle set)')
 
 
 # How often the control parameters are brought up to date with the device's values.
@@ -83,17 +88,55 @@ class USBImagePublisher(Node):
              'package://pkg/path.yaml; empty: ~/.ros/camera_info/${NAME}.yaml if it exists'),
         Spec('reliability', 'reliable', 'publisher QoS reliability', choices=tuple(RELIABILITY)),
         Spec('depth', 10, 'publisher QoS queue depth', (1, 1000)),
+        MANAGED,
     )
     # --help lists usb_cam's control names too; the camera's own are declared once it is open.
     PARAMETERS = OWN_PARAMETERS + ALIAS_HELP
 
     # What close() finds when start-up was interrupted before these were made.
-    capture = controls = None
+    capture = controls = images = None
     _log_name = NODE_NAME
     raw_published = compressed_published = frames_decoded = 0
 
+    @classmethod
+    def variant(cls):
+        """Return the class to build: the lifecycle node when the parameter managed is true."""
+        if read_given(cls.NODE_NAME, MANAGED):
+            from py_vision.managed_publisher import ManagedPublisher
+            return ManagedPublisher
+        return cls
+
     def __init__(self):
         super().__init__(self.NODE_NAME)
+        self._setup(self._declare_parameters())
+        self._make_publishers()
+        self._configure_camera()
+        self._declare_controls()
+        self._load_calibration()
+        self.capture.start()
+
+    def _declare_parameters(self, errors=None):
+        """
+        Declare the node's own parameters; return their checked values.
+
+        With a list for errors, an unusable value is added to it (and the default used)
+        instead of raising ConfigError. The camera's controls are declared once it is open.
+        """
+        self._params = Parameters(self)
+        live = {'jpeg_quality': self._set_jpeg_quality, 'frame_id': self._set_frame_id}
+        values = {}
+        for spec in self.OWN_PARAMETERS:
+            try:
+                values[spec.name] = self._params.declare(spec, live.get(spec.name))
+            except ConfigError as error:
+                if errors is None:
+                    raise
+                errors.append(str(error))
+                values[spec.name] = None if spec.optional else spec.default
+        return values
+
+    def _setup(self, values):
+        """Take the parameters' values; make the capture loop (closed) and /diagnostics."""
         # rclpy may be shut down when close() logs (Ctrl-C): a logger that does not publish
         # to /rosout, named after the node's real name.
         self._log_name = self.get_logger().name
@@ -101,40 +144,67 @@ class USBImagePublisher(Node):
         # which spin after every parallel call: one thread halves the capture's CPU
         # (bench/bench_transport.py).
         cv2.setNumThreads(1)
-        params = Parameters(self)
-        live = {'jpeg_quality': self._set_jpeg_quality, 'frame_id': self._set_frame_id}
-        values = {spec.name: params.declare(spec, live.get(spec.name))
-                  for spec in self.OWN_PARAMETERS}
+        self.values = values
         self.video_device = values['video_device']
         self.size = (values['image_width'], values['image_height'])
         self.framerate = values['framerate']
         self.pixel_format = values['pixel_format']
         self.frame_id = values['frame_id']
-
-        qos = publisher_qos(values['reliability'], values['depth'])
-        self.images = ImagePublisher(self, IMAGE_TOPIC, qos, CvBridge())
-        self.images.jpeg_quality = values['jpeg_quality']
-        self.info_publisher = self.create_publisher(
-            CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
+        self.jpeg_quality = values['jpeg_quality']
         self._synthetic = SyntheticDevices()
         self.failed = False
         self.capture = CaptureLoop(self._open_camera, self.publish_image, self.get_logger(),
                                    name=self.video_device, on_failure=self._capture_failed)
+        self._monitor = CameraMonitor()
+        self.diagnostics = Diagnostics(self, hardware_id=self.video_device)
+        self.diagnostics.add('camera', self.camera_status)
+
+    def _make_publishers(self):
+        """Create the image, compressed and camera_info publishers."""
+        qos = publisher_qos(self.values['reliability'], self.values['depth'])
+        self.images = ImagePublisher(self, IMAGE_TOPIC, qos, CvBridge())
+        self.images.jpeg_quality = self.jpeg_quality
+        self.info_publisher = self.create_publisher(
+            CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
+
+    def _configure_camera(self):
+        """Open and negotiate the camera, with the controls set; ConfigError if it fails."""
         try:
             self.capture.open()
         except SourceError as error:
             raise ConfigError(str(error))
-        self.controls = ControlParameters(params, self.capture.set_control,
+
+    def _declare_controls(self):
+        """Declare the open camera's controls as parameters (once; the loop keeps the values)."""
+        if self.controls is not None:  # configured again after a cleanup
+            return
+        self.controls = ControlParameters(self._params, self.capture.set_control,
                                           self.capture.controls, self.get_logger(),
                                           self.video_device)
-        self.controls.declare(set(values))
+        self.controls.declare(set(self.values))
         self.create_timer(CONTROL_SYNC_PERIOD_S, self.controls.sync)
+
+    def _load_calibration(self):
+        """Load the calibration; serve set_camera_info."""
         self.calibration = CameraInfoManager(
-            values['camera_name'], values['camera_info_url'], self.get_logger())
+            self.values['camera_name'], self.values['camera_info_url'], self.get_logger())
         self.calibration.load()
-        self.create_service(SetCameraInfo, sibling_topic(self, IMAGE_TOPIC, 'set_camera_info'),
-                            self._set_camera_info)
-        self.capture.start()
+        self.set_info_service = self.create_service(
+            SetCameraInfo, sibling_topic(self, IMAGE_TOPIC, 'set_camera_info'),
+            self._set_camera_info)
+
+    def camera_status(self):
+        """Return the camera's status on /diagnostics (camera_diagnostics.CameraMonitor)."""
+        subscribers = {}
+        if self.images is not None:
+            for publisher in (self.images.raw, self.images.compressed, self.info_publisher):
+                subscribers[publisher.topic_name] = publisher.get_subscription_count()
+        return self._monitor.status(self.capture.stats(), self.video_device, self.framerate,
+                                    subscribers, self.lifecycle_state())
+
+    def lifecycle_state(self):
+        """Return the lifecycle state of a managed node; None: the plain node, always on."""
+        return None
 
     # --- parameters ------------------------------------------------------------------
 
@@ -142,7 +212,9 @@ class USBImagePublisher(Node):
         self.frame_id = frame_id
 
     def _set_jpeg_quality(self, quality):
-        self.images.jpeg_quality = quality
+        self.jpeg_quality = quality
+        if self.images is not None:
+            self.images.jpeg_quality = quality
 
     # --- calibration -----------------------------------------------------------------
 

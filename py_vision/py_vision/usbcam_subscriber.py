@@ -26,6 +26,7 @@ import cv2
 import numpy as np
 from py_vision import dds
 from py_vision.cv_bridge import CvBridge, CvBridgeError, cvtColorForDisplay
+from py_vision.diagnostics import Diagnostics, OK, Recent, Status, WARN
 from py_vision.display import Display, DISPLAYS
 from py_vision.node_main import main_for
 from py_vision.params import Parameters, Spec, viewer_specs
@@ -71,6 +72,9 @@ class VideoSubscriber(Node):
         self._stats_timer = self.create_timer(self.stats_period, self.report_stats)
         self.display.attach(self, self.stats, self.subscription_.topic_name,
                             camera_topic=self.subscription_.topic_name)
+        self._recent = Recent()
+        self.diagnostics = Diagnostics(self, hardware_id=self.subscription_.topic_name)
+        self.diagnostics.add('stream', self.stream_status)
 
     def _set_stats_period(self, period):
         self.stats_period = period
@@ -152,6 +156,23 @@ class VideoSubscriber(Node):
             self.get_logger().error(
                 '%d malformed image(s) dropped in the last %.3g s; last: %s' % (
                     new_errors, self.stats_period, self._last_error))
+
+    def stream_status(self):
+        """Return the received stream's status for /diagnostics: rate, latency, unshowable."""
+        s = self.stats.snapshot()
+        recent = self._recent.update(frames=s['frames'], errors=s['errors'])
+        topic = self.subscription_.topic_name
+        values = {'topic': topic, 'frame rate': float(s['fps']),
+                  'latency p50 ms': s['latency_ms_p50'], 'latency p99 ms': s['latency_ms_p99'],
+                  'frames': s['frames'], 'not shown': s['errors'],
+                  'size': '%dx%d' % (s['width'], s['height']), 'encoding': s['encoding']}
+        if recent['errors']:
+            return Status(WARN, '%d frame(s) could not be shown lately' % recent['errors'],
+                          values)
+        if s['latency_ms_p50'] is None:
+            what = 'no frames on %s lately' if s['frames'] else 'waiting for frames on %s'
+            return Status(WARN, what % topic, values)
+        return Status(OK, 'receiving %.1f fps' % s['fps'], values)
 
     def close(self):
         """Close the window or the browser viewer (releasing its port)."""

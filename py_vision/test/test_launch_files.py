@@ -28,7 +28,7 @@ import yaml
 
 LAUNCH_DIR = ros_harness.SHARE / 'launch'
 CAMERA_ARGUMENTS = {'params_file', 'video_device', 'image_width', 'image_height', 'framerate',
-                    'pixel_format'}
+                    'pixel_format', 'managed', 'autostart'}
 PROMISED = {
     'camera.launch.py': {'executables': {'usbcam_publisher'}, 'arguments': CAMERA_ARGUMENTS},
     'pipeline.launch.py': {'executables': {'usbcam_publisher', 'cv_bridge_test',
@@ -67,6 +67,7 @@ class LaunchFile:
         self.path = LAUNCH_DIR / name
         self.tree = ast.parse(self.path.read_text(), str(self.path))
         self.nodes = calls(self.tree, 'Node')
+        self.lifecycle_nodes = calls(self.tree, 'LifecycleNode')
         self.includes = [share_path(call.args[0].args[0])
                          for call in calls(self.tree, 'IncludeLaunchDescription')]
         # Module-level tables of arguments: NAME = {argument: (type, description)}.
@@ -92,7 +93,8 @@ class LaunchFile:
         return found
 
     def all_executables(self):
-        own = {ast.literal_eval(keyword(node, 'executable')) for node in self.nodes}
+        own = {ast.literal_eval(keyword(node, 'executable'))
+               for node in self.nodes + self.lifecycle_nodes}
         for include in self.includes:
             own |= LaunchFile(include.name).all_executables()
         return own
@@ -113,11 +115,17 @@ def test_a_launch_file_starts_installed_nodes_with_the_shipped_parameters(name):
     launch_file = LaunchFile(name)
     assert 'generate_launch_description' in launch_file.functions()
     installed = {path.name for path in ros_harness.EXECUTABLES.iterdir()}
-    for node in launch_file.nodes:
+    for node in launch_file.nodes + launch_file.lifecycle_nodes:
         assert ast.literal_eval(keyword(node, 'package')) == 'py_vision'
-        assert ast.literal_eval(keyword(node, 'executable')) in installed
-        # The node name stays the executable's, so that params.yaml's section applies.
-        assert keyword(node, 'name') is None
+        executable = ast.literal_eval(keyword(node, 'executable'))
+        assert executable in installed
+        # The node name stays the executable's, so that params.yaml's section applies
+        # (launch_ros's LifecycleNode needs it given, and a namespace).
+        if node in launch_file.lifecycle_nodes:
+            assert ast.literal_eval(keyword(node, 'name')) == executable
+            assert ast.literal_eval(keyword(node, 'namespace')) == ''
+        else:
+            assert keyword(node, 'name') is None
         first = keyword(node, 'parameters').elts[0]
         assert call_name(first) == 'LaunchConfiguration'
         assert ast.literal_eval(first.args[0]) == 'params_file'
@@ -141,10 +149,18 @@ def test_camera_arguments_reach_the_node_typed_as_its_parameters():
     published = yaml.safe_load((ros_harness.SHARE / 'config' / 'params.yaml').read_text())[
         'usbcam_publisher']['ros__parameters']
     in_file = {name: type(value).__name__ for name, value in published.items()}
-    typed = LaunchFile('camera.launch.py').declared()
+    launch_file = LaunchFile('camera.launch.py')
+    typed = launch_file.declared()
+    # A switch (managed) is declared with the choices true and false.
+    choices = {call.args[0].value: ast.literal_eval(keyword(call, 'choices'))
+               for call in calls(launch_file.tree, 'DeclareLaunchArgument')
+               if isinstance(call.args[0], ast.Constant) and keyword(call, 'choices')}
     for argument, kind in typed.items():
         if argument in in_file:
-            assert kind == in_file[argument], argument
+            if in_file[argument] == 'bool':
+                assert sorted(choices[argument]) == ['false', 'true'], argument
+            else:
+                assert kind == in_file[argument], argument
     assert typed['video_device'] == 'str'
     assert typed['pixel_format'] == 'str'
 
@@ -156,3 +172,26 @@ def test_the_pipeline_viewer_watches_the_processed_topic():
     assert len(viewer) == 1
     assert ast.literal_eval(keyword(viewer[0], 'remappings')) == [
         ('usb_camera/image', 'cv_bridge_image')]
+
+
+def test_managed_camera_is_a_lifecycle_node_driven_to_active():
+    # launch_ros is not installed here: the structure launch_ros needs is checked instead.
+    launch_file = LaunchFile('camera.launch.py')
+    (camera,) = launch_file.lifecycle_nodes
+    assert ast.literal_eval(keyword(camera, 'executable')) == 'usbcam_publisher'
+    source = ast.unparse(launch_file.tree)
+    assert "given['managed'] = True" in source, 'the node must be told it is managed'
+    (handler,) = calls(launch_file.tree, 'OnStateTransition')
+    # Activated after configure succeeded, and not again after a deliberate deactivate.
+    assert ast.literal_eval(keyword(handler, 'start_state')) == 'configuring'
+    assert ast.literal_eval(keyword(handler, 'goal_state')) == 'inactive'
+    assert ast.unparse(keyword(handler, 'target_lifecycle_node')) == 'camera'
+    assert 'Transition.TRANSITION_ACTIVATE' in ast.unparse(keyword(handler, 'entities'))
+    transitions = {ast.unparse(call.args[0]) for call in calls(launch_file.tree, 'transition')}
+    assert transitions == {'Transition.TRANSITION_ACTIVATE', 'Transition.TRANSITION_CONFIGURE'}
+    (change,) = calls(launch_file.tree, 'ChangeState')
+    assert ast.unparse(keyword(change, 'lifecycle_node_matcher')) == 'matches_action(camera)'
+    returned = [node for node in ast.walk(launch_file.tree) if isinstance(node, ast.Return)]
+    assert any(ast.unparse(node.value) == '[activate_when_configured, camera, transition('
+               'Transition.TRANSITION_CONFIGURE)]' for node in returned), \
+        'the activating handler is registered before the configure request is emitted'
