@@ -44,6 +44,7 @@ import argparse
 import json
 import os
 from pathlib import Path
+import shutil
 import statistics
 import subprocess
 import sys
@@ -171,6 +172,7 @@ def main():
                   file=sys.stderr)
     finally:
         camera.close()
+        shutil.rmtree(state, ignore_errors=True)
     print('| size | format | fps | frames kept as | bare cv2 read, ms CPU/frame | '
           'py_vision capture, ms CPU/frame | ratio |')
     print('|---|---|---|---|---|---|---|')
