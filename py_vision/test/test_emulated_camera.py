@@ -30,7 +30,7 @@ import subprocess
 import sys
 import textwrap
 
-from emulated_camera import HERE, jpeg_digest
+from emulated_camera import HERE
 import ros_harness
 import v4l2_ioctl as v4l2
 

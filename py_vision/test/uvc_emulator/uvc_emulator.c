@@ -789,7 +789,7 @@ static void release_owner(struct handle *h)
 
 static uint8_t zigzag[64];     /* zigzag index -> natural index */
 static float dct_cos[8][8];
-static uint32_t crc_table[256];
+static uint32_t crc_table[8][256];   /* [k][n]: the CRC of byte n followed by k zero bytes */
 static pthread_once_t jpeg_once = PTHREAD_ONCE_INIT;
 
 static void jpeg_init(void)
@@ -798,8 +798,11 @@ static void jpeg_init(void)
         uint32_t c = n;
         for (int k = 0; k < 8; k++)
             c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-        crc_table[n] = c;
+        crc_table[0][n] = c;
     }
+    for (int k = 1; k < 8; k++)
+        for (int n = 0; n < 256; n++)
+            crc_table[k][n] = (crc_table[k - 1][n] >> 8) ^ crc_table[0][crc_table[k - 1][n] & 0xFF];
     int k = 0;
     for (int s = 0; s < 15; s++) {
         if (s % 2 == 0) {
@@ -1235,12 +1238,25 @@ static int corrupt_mode_of(const struct camera *cam, uint64_t index)
     return cam->corrupt_mode == 3 ? (int)((index / every) % 3) : cam->corrupt_mode;
 }
 
-/* The CRC-32 zlib computes (reflected, polynomial 0xEDB88320), so Python's zlib.crc32 agrees. */
+static uint32_t le32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* The CRC-32 zlib computes (reflected, polynomial 0xEDB88320), so Python's zlib.crc32 agrees;
+ * eight bytes per step through the tables (about 1 GB/s), the tail a byte at a time. */
 static uint32_t crc32_of(const uint8_t *data, size_t len)
 {
+    const uint32_t (*t)[256] = crc_table;
     uint32_t c = 0xFFFFFFFFu;
-    for (size_t i = 0; i < len; i++)
-        c = crc_table[(c ^ data[i]) & 0xFF] ^ (c >> 8);
+    size_t i = 0;
+    for (; i + 8 <= len; i += 8) {
+        uint32_t a = c ^ le32(data + i), b = le32(data + i + 4);
+        c = t[7][a & 0xFF] ^ t[6][(a >> 8) & 0xFF] ^ t[5][(a >> 16) & 0xFF] ^ t[4][a >> 24]
+            ^ t[3][b & 0xFF] ^ t[2][(b >> 8) & 0xFF] ^ t[1][(b >> 16) & 0xFF] ^ t[0][b >> 24];
+    }
+    for (; i < len; i++)
+        c = t[0][(c ^ data[i]) & 0xFF] ^ (c >> 8);
     return c ^ 0xFFFFFFFFu;
 }
 
