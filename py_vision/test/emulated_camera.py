@@ -26,11 +26,14 @@ inject faults (unplug, replug under another node, stall, permission denied) and 
 
 Frames are the synthetic camera's picture (py_vision.capture.synthetic_picture) without the
 moving box and digits: its background for the size, and the 4 x 11 frame-index code that
-`read_frame_index` decodes, drawn by the library for each frame's index. How it works and the
-data-file format: docs/emulated_cameras.md.
+`read_frame_index` decodes, drawn by the library for each frame's index. Each MJPEG frame a
+DQBUF hands out is recorded (index, length, CRC-32) in a ring next to the state, so a test can
+check that bytes it received are exactly the JPEG the camera served (`served_jpeg_digest`,
+`jpeg_digest`). How it works and the data-file format: docs/emulated_cameras.md.
 """
 
 import contextlib
+from dataclasses import dataclass
 import hashlib
 import mmap
 import os
@@ -40,6 +43,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import zlib
 
 import cv2
 import numpy as np
@@ -60,10 +64,30 @@ _OFF_NODE, _OFF_PLUGGED, _OFF_GENERATION, _OFF_STALLED, _OFF_DENIED = 4, 8, 12, 
 _OFF_OWNER, _OFF_FORMAT, _OFF_FRAME, _OFF_INTERVAL = 24, 32, 36, 40
 _OFF_SENSOR, _OFF_SERVED, _OFF_VALUES, _OFF_RENDER_NS = 48, 56, 64, 320
 _MAX_CONTROLS = 48
+# The served ring (struct served_record in uvc_emulator.c): tag (index + 1), length, flags,
+# CRC-32, reserved; frame `index` at slot index % _SERVED_SLOTS.
+_SERVED = struct.Struct('<QIIII')
+_SERVED_SLOTS = 4096
+_SERVED_CORRUPT = 1
 _TYPES = {'integer': 1, 'boolean': 2, 'menu': 3}
 _FLAG_READ_ONLY = 0x4
 _FAULTS = ('stalled', 'denied')
 EFFECTS = ('brightness', 'contrast', 'saturation', 'gain', 'exposure', 'white_balance')
+
+
+def jpeg_digest(data):
+    """Return (length, CRC-32) of a JPEG's bytes, as the camera records what it served."""
+    return len(data), zlib.crc32(data) & 0xFFFFFFFF
+
+
+@dataclass(frozen=True)
+class ServedJpeg:
+    """One JPEG the camera handed to a DQBUF: its frame index, length, CRC-32, brokenness."""
+
+    index: int
+    length: int
+    digest: int
+    corrupt: bool
 
 
 class CompilerMissing(RuntimeError):
@@ -302,6 +326,10 @@ class EmulatedCamera:
         self._put('I', _OFF_DENIED, 1 if faults.get('denied') else 0)
         self._reset(node)
         self._put('I', 0, _MAGIC)
+        path = self.dir / 'served'
+        path.write_bytes(bytes(_SERVED.size * _SERVED_SLOTS))
+        self._served_file = open(path, 'rb')
+        self._served = mmap.mmap(self._served_file.fileno(), 0, access=mmap.ACCESS_READ)
 
     def _put(self, kind, offset, value):
         struct.pack_into(kind, self._state, offset, value)
@@ -354,6 +382,34 @@ class EmulatedCamera:
     def next_index(self):
         """Return the frame index the sensor gives next (frames without a buffer are lost)."""
         return self._get('Q', _OFF_SENSOR)
+
+    def _served_record(self, slot):
+        """Return a whole record of the served ring (tag read before and after), or None."""
+        offset = _SERVED.size * slot
+        for _ in range(100):   # a torn read: the library was writing this very slot
+            record = _SERVED.unpack_from(self._served, offset)
+            if record[0] == struct.unpack_from('<Q', self._served, offset)[0]:
+                return record if record[0] else None
+        return None
+
+    def served_jpeg_digest(self, index):
+        """
+        Return (length, CRC-32) of the JPEG the camera served as frame `index`, or None.
+
+        None: no such frame went out of a DQBUF (lost, YUYV, not yet), or it is more than
+        4096 frames old. Compare with `jpeg_digest(data)` of bytes a program got.
+        """
+        record = self._served_record(index % _SERVED_SLOTS)
+        if record is None or record[0] != index + 1:
+            return None
+        return record[1], record[3]
+
+    def served_jpegs(self):
+        """Return the JPEGs served (the last 4096 at most) as `ServedJpeg`s, oldest first."""
+        records = (self._served_record(slot) for slot in range(_SERVED_SLOTS))
+        return sorted((ServedJpeg(tag - 1, length, crc, bool(flags & _SERVED_CORRUPT))
+                       for tag, length, flags, crc, _ in filter(None, records)),
+                      key=lambda jpeg: jpeg.index)
 
     def env(self, base_env=None):
         """Return a copy of base_env, os.environ by default, with LD_PRELOAD and this camera."""
@@ -435,6 +491,8 @@ class EmulatedCamera:
             self.unplug()
             self._state.close()
             self._file.close()
+            self._served.close()
+            self._served_file.close()
             self._state = None
         shutil.rmtree(self.dir, ignore_errors=True)
 

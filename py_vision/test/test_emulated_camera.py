@@ -39,7 +39,7 @@ import errno, json, os, sys, time
 import cv2
 import numpy as np
 import v4l2_ioctl as v4l2
-from emulated_camera import expected_yuyv
+from emulated_camera import expected_yuyv, jpeg_digest
 from py_vision.synthetic_camera import read_frame_index
 
 def say(**values):
@@ -214,6 +214,30 @@ def test_mjpeg_frames_are_real_jpeg_that_differ_frame_to_frame(emulated_camera):
     assert seen['shape'] == [480, 640, 3]
     assert all(b > a for a, b in zip(seen['indexes'], seen['indexes'][1:])), seen['indexes']
     assert seen['error'] < 3.0, 'the decoded JPEG is far from the picture of its index'
+
+
+def test_the_camera_records_the_exact_bytes_of_every_jpeg_it_serves(emulated_camera):
+    camera = emulated_camera()
+    assert camera.served_jpeg_digest(0) is None and camera.served_jpegs() == []
+    [seen] = run(camera, """
+        cap = cv2.VideoCapture('/dev/video40', cv2.CAP_V4L2)
+        cap.set(cv2.CAP_PROP_FOURCC, cv2.VideoWriter_fourcc(*'MJPG'))
+        cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
+        raw = [cap.read()[1].tobytes() for _ in range(6)]
+        indexes = [read_frame_index(cv2.imdecode(np.frombuffer(b, np.uint8), cv2.IMREAD_COLOR))
+                   for b in raw]
+        say(indexes=indexes, digests=[jpeg_digest(b) for b in raw])
+        cap.release()
+    """)
+    # What OpenCV returned with CONVERT_RGB off is, byte for byte, what the camera served as
+    # the frame whose index the picture carries.
+    assert None not in seen['indexes'], seen
+    for index, digest in zip(seen['indexes'], seen['digests']):
+        assert camera.served_jpeg_digest(index) == tuple(digest), (index, digest)
+    served = camera.served_jpegs()
+    assert set(seen['indexes']) <= {jpeg.index for jpeg in served}
+    assert not any(jpeg.corrupt for jpeg in served)
+    assert len(set(map(tuple, seen['digests']))) == len(seen['digests'])   # all differ
 
 
 def test_ioctls_enumerate_what_the_data_file_describes(emulated_camera):
@@ -444,7 +468,8 @@ def test_the_corrupt_camera_sends_a_broken_jpeg_every_nth_frame(emulated_camera)
             info, data = stream.read()
             image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
             frames.append({'sequence': info['sequence'], 'eoi': data[-2:] == b'\\xff\\xd9',
-                           'decoded': image is not None and read_frame_index(image)})
+                           'decoded': image is not None and read_frame_index(image),
+                           'digest': jpeg_digest(data)})
         say(frames=frames)
     """)
     # A fresh camera's frame index is its stream's sequence number: every `every`-th is broken
@@ -456,6 +481,12 @@ def test_the_corrupt_camera_sends_a_broken_jpeg_every_nth_frame(emulated_camera)
         if not broken:
             assert frame['decoded'] == frame['sequence'], frames
     assert sum(not f['eoi'] for f in frames) >= 2, frames
+    # The camera recorded each one, the broken ones marked, with the bytes the reader got.
+    served = {jpeg.index: jpeg for jpeg in camera.served_jpegs()}
+    for frame in frames:
+        jpeg = served[frame['sequence']]
+        assert (jpeg.length, jpeg.digest) == tuple(frame['digest']), (jpeg, frame)
+        assert jpeg.corrupt == (not frame['eoi']), (jpeg, frame)
 
 
 def test_controls_change_on_one_thread_while_opencv_reads_on_another(emulated_camera):

@@ -24,7 +24,8 @@
  * poll and select wait for frames. A camera directory holds camera.conf (what the camera
  * offers, written by the Python harness, emulated_camera.py) and state (a small file mapped
  * shared by every process using the camera: plugged or not, its node number, faults, the
- * streaming owner, the format and the control values). Everything else goes to libc as is.
+ * streaming owner, the format and the control values), and served (a ring, mapped shared too,
+ * of the JPEGs dequeued: index, length, CRC-32). Everything else goes to libc as is.
  *
  * An open emulated device is a real eventfd: its number is a real descriptor, and it is
  * readable exactly when poll on a V4L2 device would return: a filled buffer waits, the queue
@@ -71,6 +72,8 @@
 #define MAX_BUFFERS 32
 #define MAX_FDS 4096
 #define STATE_MAGIC 0x45435655u /* "UVCE" */
+#define SERVED_SLOTS 4096        /* the served ring: a frame's record is at index % slots */
+#define SERVED_CORRUPT 1u        /* a served record's flag: broken on purpose (corrupt_jpeg) */
 
 /* The shared state file: offsets are the harness's (emulated_camera.py) too. */
 struct shared_state {
@@ -89,6 +92,17 @@ struct shared_state {
     uint64_t frames_served;  /* 56: frames delivered into buffers */
     int32_t values[64];      /* 64: control values, in camera.conf order */
     uint64_t render_ns;      /* 320: CPU time spent making frames (all processes) */
+};
+
+/* One JPEG handed to a DQBUF, in the served file; the harness reads it (served_jpegs). The
+ * writer clears `tag`, fills the record, then sets `tag` to index + 1: a reader that sees the
+ * same tag before and after reading the fields has a whole record. */
+struct served_record {
+    uint64_t tag;            /* 0: index + 1, 0 while empty or being written */
+    uint32_t length;         /* 8: bytesused */
+    uint32_t flags;          /* 12: SERVED_CORRUPT */
+    uint32_t crc;            /* 16: CRC-32 (zlib's) of the bytes */
+    uint32_t reserved;       /* 20 */
 };
 
 struct frame_desc {
@@ -143,6 +157,7 @@ struct camera {
     uint32_t corrupt_every;
     int corrupt_mode;                      /* 0 truncate, 1 garbage, 2 no EOI, 3 cycle */
     struct shared_state *state;
+    struct served_record *served;          /* SERVED_SLOTS, or NULL: no served file */
     /* JPEG */
     uint8_t tables[2048];                  /* DQT and DHT segments from the harness */
     uint32_t tables_len;
@@ -165,6 +180,9 @@ struct buffer {
     struct timeval timestamp;
     int bg_frame;                          /* which background the buffer holds (YUYV) */
     uint64_t bg_look;                      /* and with which control values */
+    int jpeg;                              /* holds a JPEG: record it when dequeued */
+    uint32_t crc, flags;                   /* its CRC-32 and SERVED_CORRUPT */
+    uint64_t index;                        /* the sensor's index of the frame */
 };
 
 struct handle {
@@ -392,6 +410,17 @@ static void load_camera(const char *dir)
     if (!cam->state || !cam->n_formats) {
         free(cam);
         return;
+    }
+    size_t served_size = SERVED_SLOTS * sizeof(struct served_record);
+    snprintf(path, sizeof(path), "%s/served", dir);
+    fd = fd_open_real(path, O_RDWR | O_CLOEXEC);
+    if (fd >= 0) {
+        if (lseek(fd, 0, SEEK_END) >= (off_t)served_size) {
+            void *p = real_mmap(NULL, served_size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+            if (p != MAP_FAILED)
+                cam->served = p;
+        }
+        real_close(fd);
     }
     cameras[n_cameras++] = cam;
 }
@@ -760,10 +789,20 @@ static void release_owner(struct handle *h)
 
 static uint8_t zigzag[64];     /* zigzag index -> natural index */
 static float dct_cos[8][8];
+static uint32_t crc_table[8][256];   /* [k][n]: the CRC of byte n followed by k zero bytes */
 static pthread_once_t jpeg_once = PTHREAD_ONCE_INIT;
 
 static void jpeg_init(void)
 {
+    for (uint32_t n = 0; n < 256; n++) {
+        uint32_t c = n;
+        for (int k = 0; k < 8; k++)
+            c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+        crc_table[0][n] = c;
+    }
+    for (int k = 1; k < 8; k++)
+        for (int n = 0; n < 256; n++)
+            crc_table[k][n] = (crc_table[k - 1][n] >> 8) ^ crc_table[0][crc_table[k - 1][n] & 0xFF];
     int k = 0;
     for (int s = 0; s < 15; s++) {
         if (s % 2 == 0) {
@@ -1190,6 +1229,49 @@ static const uint8_t *background_for(struct camera *cam, uint32_t fmt, uint32_t 
     return result;
 }
 
+/* How frame `index` is broken (0 truncate, 1 garbage, 2 no EOI), or -1: it is whole. */
+static int corrupt_mode_of(const struct camera *cam, uint64_t index)
+{
+    uint32_t every = cam->corrupt_every;
+    if (!every || index % every != every - 1)
+        return -1;
+    return cam->corrupt_mode == 3 ? (int)((index / every) % 3) : cam->corrupt_mode;
+}
+
+static uint32_t le32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* The CRC-32 zlib computes (reflected, polynomial 0xEDB88320), so Python's zlib.crc32 agrees;
+ * eight bytes per step through the tables (about 1 GB/s), the tail a byte at a time. */
+static uint32_t crc32_of(const uint8_t *data, size_t len)
+{
+    const uint32_t (*t)[256] = crc_table;
+    uint32_t c = 0xFFFFFFFFu;
+    size_t i = 0;
+    for (; i + 8 <= len; i += 8) {
+        uint32_t a = c ^ le32(data + i), b = le32(data + i + 4);
+        c = t[7][a & 0xFF] ^ t[6][(a >> 8) & 0xFF] ^ t[5][(a >> 16) & 0xFF] ^ t[4][a >> 24]
+            ^ t[3][b & 0xFF] ^ t[2][(b >> 8) & 0xFF] ^ t[1][(b >> 16) & 0xFF] ^ t[0][b >> 24];
+    }
+    for (; i < len; i++)
+        c = t[0][(c ^ data[i]) & 0xFF] ^ (c >> 8);
+    return c ^ 0xFFFFFFFFu;
+}
+
+/* Write a dequeued JPEG's record into the served ring (called with h->lock held). */
+static void record_served(struct handle *h, const struct buffer *buf)
+{
+    struct served_record *r = &h->cam->served[buf->index % SERVED_SLOTS];
+    __atomic_store_n(&r->tag, 0, __ATOMIC_RELEASE);
+    __atomic_thread_fence(__ATOMIC_SEQ_CST);
+    r->length = buf->bytesused;
+    r->flags = buf->flags;
+    r->crc = buf->crc;
+    __atomic_store_n(&r->tag, buf->index + 1, __ATOMIC_RELEASE);
+}
+
 static uint32_t render_jpeg(struct handle *h, uint8_t *out, size_t cap, uint64_t index)
 {
     struct camera *cam = h->cam;
@@ -1234,9 +1316,8 @@ static uint32_t render_jpeg(struct handle *h, uint8_t *out, size_t cap, uint64_t
         out[p++] = 0xFF;
         out[p++] = i + 1 < n ? (uint8_t)(0xD0 + i % 8) : 0xD9;
     }
-    uint32_t every = cam->corrupt_every;
-    if (every && index % every == every - 1) {
-        int mode = cam->corrupt_mode == 3 ? (int)((index / every) % 3) : cam->corrupt_mode;
+    int mode = corrupt_mode_of(cam, index);
+    if (mode >= 0) {
         if (mode == 0) {
             p = jc->header_len + (p - jc->header_len) / 3;   /* cut inside the scan */
         } else if (mode == 1) {
@@ -1345,12 +1426,19 @@ static void *producer(void *arg)
         __atomic_fetch_add(&s->render_ns, (uint64_t)((c1.tv_sec - c0.tv_sec) * 1000000000LL
                                                      + (c1.tv_nsec - c0.tv_nsec)),
                            __ATOMIC_ACQ_REL);
+        int jpeg = h->cam->served && h->cam->have_tables
+            && h->cam->formats[h->fmt].fourcc == V4L2_PIX_FMT_MJPEG;
+        uint32_t crc = jpeg ? crc32_of(h->mem + (size_t)b * h->stride, used) : 0;
         struct timeval tv = {(time_t)due, (suseconds_t)((due - (time_t)due) * 1e6)};
         pthread_mutex_lock(&h->lock);
         struct buffer *buf = &h->buffers[b];
         buf->bytesused = used;
         buf->sequence = sequence;
         buf->timestamp = tv;
+        buf->jpeg = jpeg;
+        buf->crc = crc;
+        buf->flags = corrupt_mode_of(h->cam, index) >= 0 ? SERVED_CORRUPT : 0;
+        buf->index = index;
         buf->state = BUF_DONE;
         h->in_flight--;
         h->done[h->n_done++] = b;
@@ -1944,6 +2032,8 @@ static int do_ioctl(struct handle *h, unsigned int cmd, void *arg)
         memmove(h->done, h->done + 1, --h->n_done * sizeof(uint32_t));
         fill_buffer(h, i, b);
         b->flags &= ~(uint32_t)V4L2_BUF_FLAG_DONE;
+        if (h->buffers[i].jpeg)
+            record_served(h, &h->buffers[i]);
         h->buffers[i].state = BUF_IDLE;
         sync_event(h);
         return 0;
