@@ -87,7 +87,7 @@ def main():
                 int(page.locator('#stat-frames').inner_text()) >= 75,
                 30.0, interval=0.2, what='the page to show live stats')
             output.parent.mkdir(parents=True, exist_ok=True)
-            page.screenshot(path=str(output))
+            page.screenshot(path=str(output), full_page=panel)
             browser.close()
         print('wrote %s' % output)
     finally:

@@ -52,8 +52,8 @@ import yaml
 
 IMAGE_TOPIC = 'usb_camera/image'
 MANAGED = Spec('managed', False, 'run as a lifecycle node: configure opens the camera, activate '
-               'publishes, deactivate stops streaming, cleanup releases the camera '
-               '(ros2 lifecycle set)')
+               'publishes, deactivate releases the camera (it stops streaming), cleanup '
+               'releases the publishers too (ros2 lifecycle set)')
 
 
 # How often the control parameters are brought up to date with the device's values.

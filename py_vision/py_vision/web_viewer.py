@@ -889,6 +889,8 @@ _PAGE = """<!DOCTYPE html>
     why.className = "why";
     let input;
     if (c.menu) {
+      // The menu shows the chosen entry itself: its label is not repeated beside the name.
+      value.hidden = true;
       input = document.createElement("select");
       const own = document.createElement("option");
       own.value = "";

@@ -174,3 +174,11 @@ def test_moving_a_camera_control_in_the_panel_changes_the_stream(launch, peer, b
     wait_until(lambda: shown_frame(page).mean() > before + 0.5 * value, 10, interval=0.2,
                what='the shown frame to get brighter (mean was %.1f)' % before)
     assert page.locator('#control-brightness .value').inner_text() == str(value)
+
+    # A menu (the synthetic camera's auto exposure) shows its entry once, in the menu itself,
+    # and its name on one line, as the slider controls' names are.
+    menu = page.locator('#input-auto_exposure')
+    assert menu.evaluate('e => e.options[e.selectedIndex].text') == 'Aperture Priority Mode'
+    assert not page.locator('#control-auto_exposure .value').is_visible()
+    line = page.locator('#control-brightness label').bounding_box()['height']
+    assert page.locator('#control-auto_exposure label').bounding_box()['height'] == line
