@@ -178,10 +178,10 @@ class USBImagePublisher(Node):
         """Declare the open camera's controls as parameters (once; the loop keeps the values)."""
         if self.controls is not None:  # configured again after a cleanup
             return
-        self.controls = ControlParameters(self._params, self.capture.set_control,
-                                          self.capture.controls, self.get_logger(),
-                                          self.video_device)
-        self.controls.declare(set(self.values))
+        controls = ControlParameters(self._params, self.capture.set_control,
+                                     self.capture.controls, self.get_logger(), self.video_device)
+        controls.declare(set(self.values))  # ConfigError: a mistyped value, declared nothing
+        self.controls = controls
         self.create_timer(CONTROL_SYNC_PERIOD_S, self.controls.sync)
 
     def _load_calibration(self):
