@@ -23,7 +23,7 @@ the other, each three processes on one ROS domain of their own:
              (display:=none), the installed executables with the packaged Fast DDS profile
   bare       bare_image_publisher.py -> bare_image_processor.py -> bare_image_subscriber.py,
              plain rclpy with Fast DDS' defaults, importing the same numpy, OpenCV and
-             py_vision.synthetic_camera, passing frames of the same size at the same rate
+             py_vision.capture.synthetic_picture, passing frames of the same size at the same rate
 Once frames reach the last node, after a settling time, each process' VmRSS (and its anonymous,
 file and shared-memory parts) and PSS are sampled for a window; the peak of each counts. RSS
 counts shared pages (libraries, Fast DDS' shared-memory segments) in every process that

@@ -152,8 +152,9 @@ class ControlParameters:
             reason = self._set_control(name, value)
             if reason:
                 self._log.warning("%s; left at the camera's own value" % reason)
-        controls = self._read_controls()
-        by_id = {control.cid: control for control in controls}
+        # The values now; a control the device no longer answers for (it was unplugged
+        # meanwhile) keeps what the first read said, and sync() catches up once it is back.
+        by_id.update((control.cid, control) for control in self._read_controls())
         for name in wanted:
             spec = self._spec(name, by_id)
             self._specs[name] = spec

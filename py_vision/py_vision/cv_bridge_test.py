@@ -42,10 +42,9 @@ from py_vision.latest_frame import LatestFrameWorker
 from py_vision.node_main import main_for
 from py_vision.params import Parameters, Spec, viewer_specs
 from py_vision.qos import publisher_qos
-from py_vision.stats import StreamStats
+from py_vision.stats import stamp_age_s, StreamStats
 from py_vision.transport import ImagePublisher, subscribe, TRANSPORTS
 from rclpy.node import Node
-from rclpy.time import Time
 from sensor_msgs.msg import CompressedImage
 
 CIRCLE_CENTER, CIRCLE_RADIUS, CIRCLE_BGR = (60, 60), 30, (0, 0, 255)
@@ -190,7 +189,7 @@ class CvBridgeTest(Node):
         if cols > 60 and rows > 60:
             cv2.circle(image, CIRCLE_CENTER, CIRCLE_RADIUS, CIRCLE_BGR, -1)
         self.images.publish(msg.header, lambda: image)
-        age = (self.get_clock().now() - Time.from_msg(msg.header.stamp)).nanoseconds / 1e9
+        age = stamp_age_s(self.get_clock().now().nanoseconds, msg.header.stamp)
         if self.stats.add_output(age, cols, rows) == 1:
             self.get_logger().info('first image: %dx%d %s' % (
                 cols, rows, 'jpeg' if isinstance(msg, CompressedImage) else msg.encoding))

@@ -78,11 +78,12 @@ class ManagedPublisher(LifecycleNodeMixin, USBImagePublisher):
         self._make_publishers()
         try:
             self._configure_camera()
+            # A value given for one of the camera's controls is checked only now.
+            self._declare_controls()
         except ConfigError as error:
             self.get_logger().error('configure failed: %s' % error)
-            self._release_topics()
+            self._release_all()
             return FAILURE
-        self._declare_controls()
         self._load_calibration()
         self._state = 'inactive'
         self.get_logger().info('configured: camera open, not streaming')

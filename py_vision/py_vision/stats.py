@@ -18,6 +18,16 @@ import collections
 import time
 
 
+def stamp_age_s(now_ns, stamp):
+    """
+    Return how old a message's header stamp is at now_ns (a clock's nanoseconds), in seconds.
+
+    Plain arithmetic on the stamp's sec and nanosec: a stamp no rclpy Time can hold (sec is
+    signed, nanosec unchecked) is an implausible age, never an exception.
+    """
+    return (now_ns - (stamp.sec * 1000000000 + stamp.nanosec)) / 1e9
+
+
 def percentile(sorted_values, fraction):
     """Return the nearest-rank percentile of an already sorted, non-empty list."""
     rank = min(len(sorted_values) - 1, max(0, int(round(fraction * len(sorted_values))) - 1))

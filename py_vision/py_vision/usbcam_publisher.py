@@ -178,10 +178,10 @@ class USBImagePublisher(Node):
         """Declare the open camera's controls as parameters (once; the loop keeps the values)."""
         if self.controls is not None:  # configured again after a cleanup
             return
-        self.controls = ControlParameters(self._params, self.capture.set_control,
-                                          self.capture.controls, self.get_logger(),
-                                          self.video_device)
-        self.controls.declare(set(self.values))
+        controls = ControlParameters(self._params, self.capture.set_control,
+                                     self.capture.controls, self.get_logger(), self.video_device)
+        controls.declare(set(self.values))  # ConfigError: a mistyped value, declared nothing
+        self.controls = controls
         self.create_timer(CONTROL_SYNC_PERIOD_S, self.controls.sync)
 
     def _load_calibration(self):
@@ -301,14 +301,19 @@ def video_device_of(argv):
         elif flag == '--params-file':
             try:
                 with open(word) as stream:
-                    content = yaml.safe_load(stream) or {}
+                    content = yaml.safe_load(stream)
             except (OSError, yaml.YAMLError):
                 continue  # the node itself says what is wrong with the file
-            for section in (content.get('/**'), content.get(USBImagePublisher.NODE_NAME)):
-                value = ((section or {}).get('ros__parameters') or {}).get('video_device')
+            for section in (_entry(content, '/**'), _entry(content, USBImagePublisher.NODE_NAME)):
+                value = _entry(_entry(section, 'ros__parameters'), 'video_device')
                 if value is not None:
                     device = str(value)
     return device
+
+
+def _entry(mapping, key):
+    """Return mapping[key], or None when mapping is not a mapping (a params file of any shape)."""
+    return mapping.get(key) if isinstance(mapping, dict) else None
 
 
 def list_formats(argv):

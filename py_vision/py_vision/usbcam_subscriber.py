@@ -30,10 +30,9 @@ from py_vision.diagnostics import Diagnostics, OK, Recent, Status, WARN
 from py_vision.display import Display, DISPLAYS
 from py_vision.node_main import main_for
 from py_vision.params import Parameters, Spec, viewer_specs
-from py_vision.stats import StreamStats
+from py_vision.stats import stamp_age_s, StreamStats
 from py_vision.transport import jpeg_size, subscribe, TRANSPORTS
 from rclpy.node import Node
-from rclpy.time import Time
 
 DEPTH_ENCODINGS = ('16UC1', '16SC1')
 IMAGE_TOPIC = 'usb_camera/image'
@@ -83,7 +82,7 @@ class VideoSubscriber(Node):
         self._stats_timer = self.create_timer(period, self.report_stats)
 
     def _latency(self, msg):
-        return (self.get_clock().now() - Time.from_msg(msg.header.stamp)).nanoseconds / 1e9
+        return stamp_age_s(self.get_clock().now().nanoseconds, msg.header.stamp)
 
     def callback(self, msg):
         """Show one sensor_msgs/Image."""

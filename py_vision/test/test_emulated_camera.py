@@ -40,7 +40,7 @@ import cv2
 import numpy as np
 import v4l2_ioctl as v4l2
 from emulated_camera import expected_yuyv, jpeg_digest
-from py_vision.synthetic_camera import read_frame_index
+from py_vision.capture.synthetic_picture import read_frame_index
 
 def say(**values):
     print(json.dumps(values), flush=True)

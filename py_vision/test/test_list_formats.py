@@ -99,6 +99,20 @@ def test_the_device_comes_from_a_params_file(launch, emulated_camera, ros_env, t
     assert list(offered(node.output())) == ['YUYV']
 
 
+@pytest.mark.parametrize('content', ['- a list, not a mapping\n', 'usbcam_publisher: 5\n',
+                                     'usbcam_publisher:\n  ros__parameters: [1, 2]\n'])
+def test_a_params_file_of_another_shape_does_not_hide_the_device(
+        launch, ros_env, tmp_path, content):
+    # A YAML file that is not a mapping of node: {ros__parameters: {...}} names no device: the
+    # listing comes from the device given with -p, never a traceback.
+    params = tmp_path / 'params.yaml'
+    params.write_text(content)
+    status, out = list_formats(launch, ros_env, 'synthetic',
+                               ['--ros-args', '--params-file', str(params)])
+    assert status == 0 and 'Traceback' not in out, out
+    assert 'YUYV' in offered(out)
+
+
 def test_a_device_that_cannot_be_opened_is_one_line_and_status_1(
         launch, emulated_camera, ros_env):
     camera = emulated_camera(model='vga_yuyv')

@@ -199,6 +199,22 @@ def test_a_bad_parameter_fails_configure_instead_of_ending_the_node(launch, peer
     assert 'opened' not in node.output()
 
 
+def test_a_mistyped_control_fails_configure_with_the_reason_every_time(launch, peer):
+    # The controls are parameters only once the camera is open (at configure): a value of the
+    # wrong type for one is a configure that fails saying so, and the camera is released.
+    node = launch('usbcam_publisher', dict(CAMERA, brightness='bright'))
+    lifecycle = Lifecycle(peer)
+    for attempt in (1, 2):
+        assert not lifecycle.set(Transition.TRANSITION_CONFIGURE)
+        node.wait_for_output(r'ERROR.*configure failed: parameter brightness')
+        assert node.output().count('configure failed: parameter brightness') == attempt
+        assert lifecycle.get() == 'unconfigured'
+    assert publishers_of(peer, '/usb_camera/image') == 0
+    assert lifecycle.set(Transition.TRANSITION_UNCONFIGURED_SHUTDOWN)
+    assert node.wait_exit(20) == 0
+    assert 'Traceback' not in node.output()
+
+
 @pytest.mark.parametrize('state', sorted(SHUTDOWN))
 def test_shutdown_from_every_state_releases_the_camera_and_ends(launch, peer, state):
     node = launch('usbcam_publisher', CAMERA)

@@ -117,3 +117,18 @@ def test_an_unshowable_encoding_gets_one_error_and_the_stream_goes_on(viewer):
     subscriber.wait_for_output(r'ERROR.*malformed image\(s\) dropped', 20)
     errors = [line for line in subscriber.output().splitlines() if '8UC2' in line]
     assert 1 <= len(errors) <= 3, errors
+
+
+def test_a_frame_stamped_before_1970_is_shown_and_the_node_stays_up(viewer):
+    # header.stamp.sec is signed: a negative stamp (a bad clock upstream) is a huge latency,
+    # not an exception in the subscription.
+    subscriber, url, publisher = viewer
+    msg = message('mono8', CASES['mono8'])
+    msg.header.stamp.sec = -1
+
+    def shown():
+        publisher.publish(msg)
+        return json.loads(get(url + 'stats')).get('frames', 0) >= 3
+    wait_until(shown, 20, interval=0.2, what='frames stamped before 1970 on the viewer')
+    assert subscriber.proc.poll() is None
+    assert 'Traceback' not in subscriber.output()

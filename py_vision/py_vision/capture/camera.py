@@ -40,7 +40,7 @@ from py_vision.capture.synthetic_device import is_synthetic_spec, SyntheticDevic
 from py_vision.capture.v4l2 import open_v4l2, V4L2Error, V4L2Source
 from py_vision.capture.video_file import video_file_support, VideoFileSource
 
-__all__ = ['Camera', 'open_source', 'PIXEL_FORMATS']
+__all__ = ['Camera', 'index_node', 'open_source', 'PIXEL_FORMATS']
 
 PIXEL_FORMATS = ('auto', 'mjpeg', 'yuyv')
 _V4L2_NAMES = {'yuyv': 'YUYV', 'mjpeg': 'MJPG'}
@@ -69,6 +69,12 @@ def _open_camera(video_device, path, target, width, height, fps):
     return V4L2Source(cap, device)
 
 
+def index_node(video_device: str) -> Optional[str]:
+    """Return /dev/video<N> when video_device is a camera index (ASCII digits), else None."""
+    index = video_device.strip()
+    return '/dev/video%d' % int(index) if index.isascii() and index.isdigit() else None
+
+
 def open_source(video_device, width, height, fps, *, synthetic: Optional[SyntheticDevices] = None,
                 clock: Clock = MONOTONIC) -> FrameSource:
     """
@@ -95,8 +101,8 @@ def open_source(video_device, width, height, fps, *, synthetic: Optional[Synthet
         if not cap.isOpened():
             raise SourceError('cannot open video_device "%s": %s' % (device, cap.error))
         return cap
-    if device.strip().isdigit():
-        node = '/dev/video%d' % int(device)
+    node = index_node(device)
+    if node is not None:
         if not os.path.exists(node):
             raise SourceError('cannot open video_device "%s": no camera %s (%s does not '
                               'exist)' % (device, device.strip(), node))

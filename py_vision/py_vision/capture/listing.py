@@ -25,7 +25,7 @@ import os
 from typing import List
 
 import cv2
-from py_vision.capture.camera import open_source
+from py_vision.capture.camera import index_node, open_source
 from py_vision.capture.controls import ControlInfo
 from py_vision.capture.source import FrameFormat, SourceError
 from py_vision.capture.synthetic_device import is_synthetic_spec, SyntheticDevices
@@ -71,7 +71,7 @@ def device_listing(video_device: str) -> str:
         finally:
             source.release()
         return '\n'.join(lines) + '\n'
-    path = '/dev/video%d' % int(device) if device.strip().isdigit() else os.path.realpath(device)
+    path = index_node(device) or os.path.realpath(device)
     if os.path.isfile(path):
         source = open_source(device, 0, 0, 0)
         try:

@@ -150,20 +150,23 @@ class SyntheticDevices:
         return SyntheticCamera(width, height, fps, name=spec, devices=self, **options)
 
 
-def _check_size(value):
+def _positive_at_most(value, limit):
+    """Return value when it is a number in (0, limit] (not a bool, nan or inf), else None."""
     if not isinstance(value, (int, float, np.integer, np.floating)) or isinstance(value, bool):
         return None
-    if not math.isfinite(value) or value <= 0 or value > MAX_SIZE:
+    if not math.isfinite(value) or value <= 0 or value > limit:
         return None
-    return int(value)
+    return value
+
+
+def _check_size(value):
+    value = _positive_at_most(value, MAX_SIZE)
+    return None if value is None else int(value)
 
 
 def _check_fps(value):
-    if not isinstance(value, (int, float, np.integer, np.floating)) or isinstance(value, bool):
-        return None
-    if not math.isfinite(value) or value <= 0 or value > MAX_FPS:
-        return None
-    return float(value)
+    value = _positive_at_most(value, MAX_FPS)
+    return None if value is None else float(value)
 
 
 class SyntheticCamera:
