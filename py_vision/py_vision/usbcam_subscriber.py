@@ -143,10 +143,11 @@ class VideoSubscriber(Node):
             gap = ''
             if s['longest_gap_s'] > max(1.0, 5.0 / max(s['fps'], 1e-3)):
                 gap = ', gap of %.2f s' % s['longest_gap_s']
+            rate = ('%.1f fps' % s['fps']) if s['fps'] > 0 else 'rate not measured yet'
             self.get_logger().info(
-                'received %d frames (%.1f fps), latency p50 %.1f ms p99 %.1f ms, '
+                'received %d frames (%s), latency p50 %.1f ms p99 %.1f ms, '
                 '%dx%d %s on %s%s' % (
-                    s['frames'], s['fps'], s['latency_ms_p50'], s['latency_ms_p99'],
+                    s['frames'], rate, s['latency_ms_p50'], s['latency_ms_p99'],
                     s['width'], s['height'], s['encoding'], topic, gap))
         self.stats.reset_gap()
         new_errors = self.stats.errors - self._errors_reported
@@ -160,23 +161,36 @@ class VideoSubscriber(Node):
         """Return the received stream's status for /diagnostics: rate, latency, unshowable."""
         s = self.stats.snapshot()
         recent = self._recent.update(frames=s['frames'], errors=s['errors'])
-        topic = self.subscription_.topic_name
-        values = {'topic': topic, 'frame rate': float(s['fps']),
-                  'latency p50 ms': s['latency_ms_p50'], 'latency p99 ms': s['latency_ms_p99'],
-                  'frames': s['frames'], 'not shown': s['errors'],
-                  'size': '%dx%d' % (s['width'], s['height']), 'encoding': s['encoding']}
-        if recent['errors']:
-            return Status(WARN, '%d frame(s) could not be shown lately' % recent['errors'],
-                          values)
-        if s['latency_ms_p50'] is None:
-            what = 'no frames on %s lately' if s['frames'] else 'waiting for frames on %s'
-            return Status(WARN, what % topic, values)
-        return Status(OK, 'receiving %.1f fps' % s['fps'], values)
+        return stream_status(s, recent['errors'], self.subscription_.topic_name)
 
     def close(self):
         """Close the window or the browser viewer (releasing its port)."""
         if self.display is not None:
             self.display.close()
+
+
+def stream_status(snapshot: dict, recent_errors: int, topic: str) -> Status:
+    """
+    Return the status "<node>: stream" for a StreamStats snapshot.
+
+    recent_errors is how many frames could not be shown lately (Recent). A rate needs two
+    frames in the window: with one (the first frame, or a stream slower than the window) the
+    status says the rate is not measured yet instead of claiming 0 fps.
+    """
+    s = snapshot
+    values = {'topic': topic, 'frame rate': float(s['fps']),
+              'latency p50 ms': s['latency_ms_p50'], 'latency p99 ms': s['latency_ms_p99'],
+              'frames': s['frames'], 'not shown': s['errors'],
+              'size': '%dx%d' % (s['width'], s['height']), 'encoding': s['encoding']}
+    if recent_errors:
+        return Status(WARN, '%d frame(s) could not be shown lately' % recent_errors, values)
+    if s['latency_ms_p50'] is None:
+        what = 'no frames on %s lately' if s['frames'] else 'waiting for frames on %s'
+        return Status(WARN, what % topic, values)
+    if s['fps'] <= 0:
+        return Status(OK, 'receiving on %s, one frame lately: rate not measured yet' % topic,
+                      values)
+    return Status(OK, 'receiving %.1f fps' % s['fps'], values)
 
 
 main = main_for(VideoSubscriber)

@@ -294,9 +294,13 @@ def test_the_browser_page_shows_what_was_processed_and_skipped(launch, browser):
     names = ('in', 'processed', 'skipped', 'processing', 'processing-p99', 'age', 'age-p99')
 
     def filled():
-        shown = {name: page.locator('#stat-' + name).inner_text() for name in names}
-        return shown if shown['skipped'] not in ('', '-', '0') and shown['age-p99'] != '-' \
-            else None
+        # All the stats in one read: the page replaces them together once a second, and reads
+        # one by one could mix two updates (frames in from one, skipped from the next).
+        shown = page.evaluate(
+            'names => Object.fromEntries(names.map('
+            'name => [name, document.getElementById("stat-" + name).innerText]))', names)
+        everything = all(value not in ('', '-') for value in shown.values())
+        return shown if everything and shown['skipped'] != '0' else None
     shown = wait_until(filled, 30.0, interval=0.2, what='the processing stats on the page')
     assert all(page.locator('#stat-' + name).is_visible() for name in names)
     assert int(shown['in']) >= int(shown['processed']) + int(shown['skipped']), shown

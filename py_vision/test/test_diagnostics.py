@@ -22,6 +22,8 @@ cannot show, cv_bridge_test falling behind (WARN) and keeping up.
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from param_client import set_parameter
+from py_vision.stats import StreamStats
+from py_vision.usbcam_subscriber import stream_status
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_harness import wait_until
 from sensor_msgs.msg import Image
@@ -108,7 +110,9 @@ def test_subscriber_status_shows_rate_latency_and_frames_it_cannot_show(launch, 
     assert 'waiting for frames on /usb_camera/image' in waiting.message
     launch('usbcam_publisher', {'video_device': 'synthetic', 'framerate': 10.0,
                                 'image_width': 160, 'image_height': 120})
-    ok, values = monitor.wait_for(name, OK)
+    # The first OK may come with one frame received, before a rate can be measured.
+    ok, values = monitor.wait_for(name, OK, lambda v: float(v['frame rate']) > 0)
+    assert not [s.message for s in monitor.statuses(name) if '0.0 fps' in s.message]
     assert ok.hardware_id == '/usb_camera/image'
     assert float(values['frame rate']) > 0 and float(values['latency p50 ms']) >= 0
     assert float(values['latency p99 ms']) >= float(values['latency p50 ms'])
@@ -119,6 +123,25 @@ def test_subscriber_status_shows_rate_latency_and_frames_it_cannot_show(launch, 
         bad.publish(Image(height=4, width=4, encoding='nonsense', step=4, data=bytes(16)))
     warn, values = monitor.wait_for(name, WARN, lambda v: v['not shown'] == '3')
     assert 'could not be shown' in warn.message
+
+
+def test_one_frame_received_is_no_rate_of_zero():
+    # With one frame in the window there is no rate yet: the status must not say "0.0 fps".
+    now = [100.0]
+    stats = StreamStats(window_s=2.0, clock=lambda: now[0])
+    assert stream_status(stats.snapshot(), 0, '/cam').message == 'waiting for frames on /cam'
+    stats.add(0.002, 160, 120, 'bgr8')
+    now[0] += 0.05
+    first = stream_status(stats.snapshot(), 0, '/cam')
+    assert first.level == OK and 'rate not measured yet' in first.message, first.message
+    assert 'fps' not in first.message
+    now[0] += 0.05
+    stats.add(0.002, 160, 120, 'bgr8')
+    now[0] += 0.1
+    second = stream_status(stats.snapshot(), 0, '/cam')
+    assert second.level == OK and second.message == 'receiving 5.0 fps', second.message
+    now[0] += 5.0  # the stream stopped: both frames leave the window
+    assert stream_status(stats.snapshot(), 0, '/cam').message == 'no frames on /cam lately'
 
 
 def test_cv_bridge_test_warns_when_it_cannot_keep_up(launch, peer):

@@ -251,6 +251,13 @@ def test_the_plain_node_is_not_a_lifecycle_node(launch, peer):
     node.wait_for_output('opened synthetic')
     (managed,) = get_parameters(peer, NODE, ['managed'])
     assert managed.bool_value is False
-    services = [name for name, _ in peer.node.get_service_names_and_types_by_node(NODE, '/')]
-    assert '/%s/set_parameters' % NODE in services
+
+    def listed():
+        # Answering a service call does not mean the peer's graph knows the node's name yet
+        # (discovery of the node and of its endpoints are separate): wait for both.
+        if (NODE, '/') not in peer.node.get_node_names_and_namespaces():
+            return None
+        names = [name for name, _ in peer.node.get_service_names_and_types_by_node(NODE, '/')]
+        return names if '/%s/set_parameters' % NODE in names else None
+    services = wait_until(listed, 30, 0.1, 'the services of %s in the graph' % NODE)
     assert not [name for name in services if 'change_state' in name or 'get_state' in name]
