@@ -22,7 +22,9 @@ webcam, docs/emulated_cameras.md: OpenCV's real V4L2 backend streams it) at 640x
 and 1920x1080, in YUYV and in MJPEG, each run in a process of its own:
 
 - bare: ``cv2.VideoCapture(device, cv2.CAP_V4L2)`` set to the format, size and rate, and a
-  ``cap.read()`` loop, which gives BGR images (OpenCV converts YUYV and decodes MJPEG);
+  ``cap.read()`` loop, which gives BGR images (OpenCV converts YUYV and decodes MJPEG), with
+  each frame's capture time read (``CAP_PROP_POS_MSEC``, the driver's buffer time), as
+  py_vision reads it for the frame's stamp;
 - py_vision: `CaptureLoop` over `Camera.open` (negotiation, the driver's timestamps, stale and
   corrupt frame checks, loss detection, counters) handing each frame to a function that takes
   its BGR image (`Frame.bgr()`: the camera's JPEG decoded on demand), as usbcam_publisher does
@@ -37,7 +39,8 @@ the system calls, py_vision's own work; not the emulated camera's thread that ma
 frames, which is the device's) per frame after the first 10, at the camera's own rate. The
 runs alternate bare and py_vision, 5 of each: the table gives the medians, and the median of
 the ratios of each py_vision run to the bare run just before it. Prints a Markdown table and
-writes bench/results/capture.json.
+writes bench/results/capture.json. ``--cases 640x480/mjpeg/JPEG ...`` measures some cases only,
+``--runs N`` N runs of each.
 """
 
 import argparse
@@ -101,6 +104,7 @@ if mode == 'bare':
     while len(marks) < WARMUP + frames:
         ok, kept = cap.read()
         if ok:
+            stamp = cap.get(cv2.CAP_PROP_POS_MSEC)   # the capture time, as py_vision reads it
             frame_seen()
     cap.release()
 else:
@@ -142,14 +146,25 @@ def run(camera, env, width, height, fmt, fps, output, mode):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('--quick', action='store_true', help='one run of each')
-    runs = 1 if parser.parse_args().quick else RUNS
+    parser.add_argument('--runs', type=int, default=RUNS, help='runs of each (%d)' % RUNS)
+    parser.add_argument('--cases', nargs='+', metavar='SIZE/FORMAT/KEPT',
+                        help='only these cases, e.g. 640x480/mjpeg/JPEG 1280x720/yuyv/BGR')
+    args = parser.parse_args()
+    runs = 1 if args.quick else args.runs
+    cases = CASES
+    if args.cases:
+        names = {'%dx%d/%s/%s' % (case[:3] + (case[4],)): case for case in CASES}
+        unknown = [name for name in args.cases if name not in names]
+        if unknown:
+            parser.error('no case %s; the cases: %s' % (', '.join(unknown), ' '.join(names)))
+        cases = [names[name] for name in args.cases]
     state = tempfile.mkdtemp(prefix='bench_capture_')
     camera = EmulatedCamera(state, 'webcam_1080p', 60)
     env = camera.env(dict(os.environ, PYTHONPATH=os.pathsep.join(
         [str(REPO / 'py_vision'), os.environ.get('PYTHONPATH', '')])))
     rows = []
     try:
-        for width, height, fmt, fps, output in CASES:
+        for width, height, fmt, fps, output in cases:
             results = {'bare': [], 'py_vision': []}
             for _ in range(runs):
                 for mode in results:

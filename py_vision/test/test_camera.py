@@ -102,6 +102,34 @@ def test_mjpeg_frames_are_the_cameras_jpeg_and_decode_only_on_demand():
     assert frame.bgr() is image  # decoded once
 
 
+class ScriptedSource:
+    """A 640x480 MJPEG source that gives the camera these byte strings as frames, in turn."""
+
+    def __init__(self, payloads):
+        self.payloads = list(payloads)
+        self.last_index = self.last_capture_time = None
+
+    def get(self, prop):
+        return {cv2.CAP_PROP_FRAME_WIDTH: 640, cv2.CAP_PROP_FRAME_HEIGHT: 480,
+                cv2.CAP_PROP_FPS: 30.0}[prop]
+
+    def read(self):
+        return True, np.frombuffer(self.payloads.pop(0), np.uint8).reshape(1, -1)
+
+
+def test_a_broken_jpeg_is_corrupt_even_after_whole_ones_with_the_same_header():
+    whole = synthetic_jpeg(3, 640, 480)
+    noisy = bytearray(whole)
+    noisy[2:300] = bytes((7 * i) % 255 for i in range(298))  # header noise, EOI still there
+    frames = [whole, whole + bytes(16), bytes(noisy), whole[:len(whole) // 2], whole[:-2],
+              whole]
+    camera = _Camera(ScriptedSource(frames), 'scripted', 'mjpeg', [])
+    corrupt = [camera.read().corrupt for _ in frames]
+    # Padding after EOI is a UVC payload's and harmless; noise, a cut or no EOI are not.
+    assert corrupt == [False, False, True, True, True, False]
+    assert cv2.imdecode(np.frombuffer(bytes(noisy), np.uint8), cv2.IMREAD_COLOR) is None
+
+
 def test_yuyv_frames_are_bgr_and_exact():
     camera = Camera.open('synthetic', 640, 480, 30.0, 'yuyv')
     frame = camera.read()

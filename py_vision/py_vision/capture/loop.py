@@ -258,20 +258,22 @@ class CaptureLoop:
         return max(limit, self._timing.first_frame_s) if first else limit
 
     def _capture(self) -> None:
+        # Looked up once here rather than once per frame.
+        stopped, now_fn, on_frame = self._stop.is_set, self._clock.now, self._on_frame
         failed_reads = 0
-        last_frame = self._clock.now()
+        last_frame = now_fn()
         first = True   # no frame yet from this camera
-        while not self._stop.is_set():
+        while not stopped():
             camera = self._camera
             if camera is None:
                 if self._reopen():
-                    last_frame = self._not_before = self._clock.now()
+                    last_frame = self._not_before = now_fn()
                     first = True
                 continue
             frame = camera.read()
-            if self._stop.is_set():
+            if stopped():
                 return
-            now = self._clock.now()
+            now = now_fn()
             if frame is None:
                 failed_reads += 1
                 stalled = now - last_frame >= self._stall_limit(camera, first)
@@ -287,8 +289,11 @@ class CaptureLoop:
                 self._count_corrupt()
                 continue
             last_frame, first = now, False
-            self._measure(now)
-            self._on_frame(camera, frame)
+            # The rate frames arrive at: counted over windows of about a second.
+            self._rate_frames += 1
+            if now - self._rate_start >= 1.0:
+                self._measure(now)
+            on_frame(camera, frame)
             if frame.corrupt:  # found out while decoding it: on_frame published nothing
                 self._count_corrupt()
                 continue
@@ -301,13 +306,10 @@ class CaptureLoop:
                               % (self._name, self._corrupt))
 
     def _measure(self, now) -> None:
-        """Count frames over windows of about a second: the rate they arrive at."""
-        self._rate_frames += 1
-        elapsed = now - self._rate_start
-        if elapsed >= 1.0:
-            if self._rate_start:
-                self._rate = (self._rate_frames - 1) / elapsed
-            self._rate_start, self._rate_frames = now, 1
+        """End a window of a second or more (frames counted in it): its rate; start the next."""
+        if self._rate_start:
+            self._rate = (self._rate_frames - 1) / (now - self._rate_start)
+        self._rate_start, self._rate_frames = now, 1
 
     def _lose(self, camera, failed_reads, stalled_s) -> None:
         if stalled_s is not None:

@@ -90,6 +90,7 @@ CTRL_FLAG_WRITE_ONLY = 0x0040
 CTRL_FLAG_NEXT_CTRL = 0x80000000
 CTRL_FLAG_NEXT_COMPOUND = 0x40000000
 _CTRL_TYPES = {1: INT, 2: BOOL, 3: MENU}   # integer, boolean, menu: what a parameter can be
+_POS_MSEC = cv2.CAP_PROP_POS_MSEC           # read once per frame: the driver's buffer time
 _CTRL_CLASS_TYPE = 6
 # A stepwise or continuous size range is offered at these common sizes.
 _COMMON_SIZES = ((160, 120), (320, 240), (640, 480), (800, 600), (1024, 768), (1280, 720),
@@ -349,14 +350,15 @@ class V4L2Source:
 
     def read(self):
         """Read a frame; its capture time is the driver's buffer timestamp when plausible."""
-        ok, frame = self._cap.read()
-        self.last_capture_time = None
-        self.last_index = None
+        cap = self._cap
+        ok, frame = cap.read()
+        captured = None
         if ok:
             # OpenCV's V4L2 backend gives the buffer's CLOCK_MONOTONIC time in ms here.
-            captured = self._cap.get(cv2.CAP_PROP_POS_MSEC) / 1e3
-            if 0 <= time.monotonic() - captured < 10.0:
-                self.last_capture_time = captured
+            captured = cap.get(_POS_MSEC) / 1e3
+            if not 0 <= time.monotonic() - captured < 10.0:
+                captured = None
+        self.last_capture_time = captured
         return ok, frame
 
     def set(self, prop_id, value):  # noqa: A003 (OpenCV's name)
