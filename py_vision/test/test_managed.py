@@ -48,10 +48,33 @@ class Lifecycle:
     """What `ros2 lifecycle set/get` do: the node's change_state and get_state services."""
 
     def __init__(self, peer, node=NODE):
+        # change_state's client is made first: see _wait_until_answered.
         self._change = peer.node.create_client(ChangeState, '/%s/change_state' % node)
         self._get = peer.node.create_client(GetState, '/%s/get_state' % node)
         for client in (self._change, self._get):
             assert client.wait_for_service(timeout_sec=30), 'no %s' % client.srv_name
+        self._wait_until_answered()
+
+    def _wait_until_answered(self):
+        """
+        Ask get_state until the node answers: then it has found where to send its answers.
+
+        wait_for_service() says that this side has found the node's service, not that the
+        node has found this client's reply reader; an answer sent before it has is dropped
+        (Fast DDS waits 100 ms for the reader, then logs 'failed to send response') and the
+        request waits forever. A transition cannot be asked twice; get_state can. The node
+        learns this process's readers in the order they were made, so once get_state's
+        answer arrives, change_state's (made before it) arrives too.
+        """
+        def answered():
+            future = self._get.call_async(GetState.Request())
+            try:
+                wait_until(future.done, 3, what='get_state')
+            except AssertionError:
+                self._get.remove_pending_request(future)
+                return False
+            return True
+        wait_until(answered, 30, 0.0, what='an answer from %s' % self._get.srv_name)
 
     def _call(self, client, request):
         future = client.call_async(request)
