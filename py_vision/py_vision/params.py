@@ -281,19 +281,40 @@ class Parameters:
         Show values the node learned elsewhere (a camera's) without applying them again.
 
         specs: new descriptors for parameters whose description changed (e.g. a control that
-        became inactive). Read-only parameters keep the value they were declared with.
+        became inactive, or a new range). Called from a timer, it never raises: what rclpy will
+        not let change is left as it is. A parameter declared read-only stays read-only (rclpy
+        cannot change its descriptor or its value); one whose value falls outside its new range
+        takes the value in values at the same time.
         """
         node = self._node
         self._declaring = True
         try:
             for spec in specs:
-                if node.has_parameter(spec.name) and spec.live:
-                    node.set_descriptor(spec.name, spec.descriptor())
-            changes = [Parameter(name, value=value) for name, value in values.items()
-                       if node.has_parameter(name) and node.get_parameter(name).value != value
-                       and self._specs[name][0].live]
-            if changes:
-                node.set_parameters(changes)
+                if not node.has_parameter(spec.name) or node.describe_parameter(
+                        spec.name).read_only:
+                    continue
+                if not spec.live:
+                    continue  # cannot be made read-only after declaration; the device refuses
+                alternative = None
+                if spec.name in values:
+                    alternative = Parameter(spec.name, value=values[spec.name]
+                                            ).get_parameter_value()
+                try:
+                    node.set_descriptor(spec.name, spec.descriptor(), alternative)
+                except Exception:  # noqa: B902 - rclpy refuses: keep the old descriptor
+                    continue
+                self._specs[spec.name] = (spec, self._specs.get(spec.name, (None, None))[1])
+            for name, value in values.items():
+                if not node.has_parameter(name) or name not in self._specs:
+                    continue
+                if not self._specs[name][0].live or node.describe_parameter(name).read_only:
+                    continue
+                if node.get_parameter(name).value == value:
+                    continue
+                try:
+                    node.set_parameters([Parameter(name, value=value)])
+                except Exception:  # noqa: B902 - a value rclpy refuses stays as it was
+                    continue
         finally:
             self._declaring = False
 

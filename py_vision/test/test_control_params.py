@@ -14,7 +14,10 @@
 
 """ControlParameters: a camera's controls declared as parameters of a node, in process."""
 
+from dataclasses import replace
+
 from py_vision.capture import Camera
+from py_vision.capture.controls import CID, ControlInfo, INT
 from py_vision.control_params import ControlParameters
 from py_vision.params import Parameters
 import rclpy
@@ -49,3 +52,42 @@ def test_a_camera_lost_while_its_controls_are_declared_still_gets_them(peer):
     finally:
         node.destroy_node()
         camera.release()
+
+
+def _brightness(**changes):
+    control = ControlInfo(CID.BRIGHTNESS, 'Brightness', INT, 0, 255, 1, 128, 128)
+    return replace(control, **changes)
+
+
+def _sync_with(node, first, later):
+    """Declare the controls as first reported, then sync to what the device reports later."""
+    reads = iter([[first], [first]])
+    controls = ControlParameters(Parameters(node), lambda name, value: None,
+                                 lambda: next(reads, [later]), Log(), 'fake')
+    controls.declare(set())
+    controls.sync()
+    return controls
+
+
+def test_sync_survives_a_read_only_control_that_becomes_writable(peer):
+    node = rclpy.create_node('sync_read_only', context=peer.context)
+    try:
+        _sync_with(node, _brightness(read_only=True), _brightness(value=140))
+        # rclpy cannot change a read-only parameter: it keeps what it was declared with.
+        assert node.describe_parameter('brightness').read_only
+        assert node.get_parameter('brightness').value == 128
+    finally:
+        node.destroy_node()
+
+
+def test_sync_moves_a_value_outside_the_new_range_with_the_range(peer):
+    node = rclpy.create_node('sync_range', context=peer.context)
+    try:
+        _sync_with(node, _brightness(value=200),
+                   _brightness(maximum=100, value=90, inactive=True))
+        described = node.describe_parameter('brightness')
+        assert described.integer_range[0].to_value == 100
+        assert 'inactive' in described.additional_constraints
+        assert node.get_parameter('brightness').value == 90
+    finally:
+        node.destroy_node()
