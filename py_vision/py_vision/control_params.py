@@ -108,6 +108,7 @@ class ControlParameters:
         self._log = log
         self._specs: Dict[str, Spec] = {}
         self._targets: Dict[str, Tuple[int, Optional[Alias]]] = {}  # name -> (cid, alias)
+        parameters.add_check(self.refusal)
 
     @property
     def names(self) -> List[str]:
@@ -158,7 +159,35 @@ class ControlParameters:
         for name in wanted:
             spec = self._spec(name, by_id)
             self._specs[name] = spec
-            self._parameters.declare_shown(spec, self._setter(name) if spec.live else None)
+            self._parameters.declare_shown(spec, self._setter(name) if spec.live else None,
+                                           first=self._targets[name][0] in owners)
+
+    def refusal(self, changes: Dict[str, Any]) -> Optional[str]:
+        """
+        Return why the camera would refuse one of changes (name -> value) made together.
+
+        None when it takes them all. A control inactive now counts as active when the same
+        changes switch off the automatic mode that owns it. A camera that is lost answers
+        nothing here: applying the changes reports it.
+        """
+        by_id = {control.cid: control for control in self._read_controls()}
+        wanted = []  # (name, alias, control, device value)
+        for name, value in changes.items():
+            if name not in self._targets or self._targets[name][0] not in by_id:
+                continue
+            cid, alias = self._targets[name]
+            control = by_id[cid]
+            wanted.append((name, alias, control,
+                           alias.to_device(value, control) if alias else int(value)))
+        raw = {control.cid: device_value for _, _, control, device_value in wanted}
+        for name, alias, control, device_value in wanted:
+            owner, frees = OWNED_BY.get(control.cid, (None, ()))
+            if control.inactive and raw.get(owner) in frees:
+                control = replace(control, inactive=False)
+            reason = control.refusal(device_value)
+            if reason:
+                return reason.replace(control.name, name, 1) if alias else reason
+        return None
 
     def _spec(self, name, by_id) -> Spec:
         cid, alias = self._targets[name]

@@ -21,6 +21,7 @@ from py_vision.capture.controls import CID, ControlInfo, INT
 from py_vision.control_params import ControlParameters
 from py_vision.params import Parameters
 import rclpy
+from rclpy.parameter import Parameter
 
 
 class Log:
@@ -91,3 +92,48 @@ def test_sync_moves_a_value_outside_the_new_range_with_the_range(peer):
         assert node.get_parameter('brightness').value == 90
     finally:
         node.destroy_node()
+
+
+def _declared(node):
+    camera = Camera.open('synthetic', 160, 120, 10.0)
+    applied = []
+
+    def set_control(name, value):
+        applied.append((name, value))
+        return camera.set_control(name, value)
+
+    controls = ControlParameters(Parameters(node), set_control, camera.controls, Log(),
+                                 'synthetic')
+    controls.declare(set())
+    return camera, applied
+
+
+def test_a_set_the_camera_refuses_in_part_changes_nothing(peer):
+    node = rclpy.create_node('set_all_or_nothing', context=peer.context)
+    camera, applied = _declared(node)
+    try:
+        # exposure_time_absolute is inactive while auto_exposure is on: the camera refuses it.
+        results = node.set_parameters_atomically([
+            Parameter('brightness', value=10), Parameter('exposure_time_absolute', value=300)])
+        assert not results.successful
+        assert 'exposure_time_absolute is inactive' in results.reason
+        assert applied == []
+        assert camera.control('brightness').value == 0
+        assert node.get_parameter('brightness').value == 0
+    finally:
+        node.destroy_node()
+        camera.release()
+
+
+def test_a_set_that_frees_a_control_applies_the_automatic_mode_first(peer):
+    node = rclpy.create_node('set_mode_first', context=peer.context)
+    camera, applied = _declared(node)
+    try:
+        results = node.set_parameters_atomically([
+            Parameter('exposure_time_absolute', value=300), Parameter('auto_exposure', value=1)])
+        assert results.successful, results.reason
+        assert [name for name, _ in applied] == ['auto_exposure', 'exposure_time_absolute']
+        assert camera.control('exposure_time_absolute').value == 300
+    finally:
+        node.destroy_node()
+        camera.release()
