@@ -34,11 +34,10 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from py_vision.capture.controls import (
     Alias, BOOL, ControlInfo, MENU, OWNED_BY, USB_CAM_ALIASES)
+from py_vision.control_descriptor import alias_constraints, control_constraints, describe
 from py_vision.params import Parameters, Spec
 
 __all__ = ['ALIAS_HELP', 'ControlParameters', 'alias_spec', 'control_spec']
-
-CAMERA_CONTROL = 'camera control'
 
 
 def _kind(control: ControlInfo) -> type:
@@ -52,23 +51,16 @@ def _value(control: ControlInfo, alias: Optional[Alias] = None) -> Any:
     return bool(raw) if control.kind == BOOL else int(raw)
 
 
-def _description(control: ControlInfo) -> str:
-    if control.kind == MENU:
-        return '%s; menu: %s' % (control.label, control.menu_text())
-    return control.label
-
-
 def control_spec(control: ControlInfo) -> Spec:
     """Return the parameter of one device control, described by the device."""
-    constraints = '%s 0x%08x (%s, step %d, default %d)' % (
-        CAMERA_CONTROL, control.cid, control.kind, control.step, control.default)
+    inactive = None
     if control.inactive:
-        constraints += '; inactive while %s' % (
-            control.inactive_reason or 'an automatic mode controls it')
-    if control.read_only:
-        constraints += '; read-only'
+        inactive = control.inactive_reason
+    constraints = control_constraints(control.cid, control.kind, control.step, control.default,
+                                      inactive, control.read_only)
     value_range = None if control.kind == BOOL else (control.minimum, control.maximum)
-    return Spec(control.name, _value(control), _description(control), value_range,
+    description = describe(control.label, control.menu if control.kind == MENU else ())
+    return Spec(control.name, _value(control), description, value_range,
                 live=not control.read_only, step=control.step, constraints=constraints)
 
 
@@ -80,7 +72,7 @@ def alias_spec(alias: Alias, control: ControlInfo) -> Spec:
     return Spec(alias.name, _value(control, alias),
                 "%s (usb_cam's name for %s)" % (alias.description, control.name), value_range,
                 live=not control.read_only, step=control.step if value_range else 1,
-                constraints='%s: usb_cam name for %s' % (CAMERA_CONTROL, control.name))
+                constraints=alias_constraints(control.name))
 
 
 # For --help, before any camera is open: usb_cam's names, not set unless given.
