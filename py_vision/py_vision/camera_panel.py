@@ -18,8 +18,8 @@ The camera panel's ROS side: the controls of the node that publishes the topic a
 `CameraPanel` finds the publisher of the shown topic in the ROS graph, reads its parameters
 through the standard parameter services (list, describe, get) and keeps them current from
 /parameter_events (a change made with `ros2 param set` shows at once) and a periodic re-read.
-A camera control is a parameter whose descriptor's additional_constraints starts with
-`CONTROL_MARK`; its range, step, menu and read-only flag come from that descriptor, so the
+A camera control is a parameter whose descriptor's additional_constraints mark it as one
+(control_descriptor); its range, step, menu and read-only flag come from that descriptor, so the
 panel shows what the camera reports. What the camera is (device, pixel format, measured rate)
 comes from the publisher's parameters and, when it publishes them, its /diagnostics.
 
@@ -32,11 +32,11 @@ import collections
 import concurrent.futures
 from dataclasses import dataclass
 import math
-import re
 import threading
 import time
 from typing import Any, Dict, List, Optional, Tuple
 
+from py_vision.control_descriptor import is_control, parse_constraints, parse_menu
 from py_vision.web_viewer import CameraError
 from rcl_interfaces.msg import (
     Parameter as ParameterMsg, ParameterEvent, ParameterType, ParameterValue)
@@ -49,9 +49,7 @@ try:
 except ImportError:  # a system without diagnostic_msgs: the panel shows what it knows without
     DiagnosticArray = None
 
-# The contract with the camera's node: additional_constraints starting with these words mark a
-# camera control (docs/panel.md, "Which parameters are controls").
-CONTROL_MARK = 'camera control'
+# The contract with the camera's node is control_descriptor's (docs/panel.md).
 CALL_TIMEOUT_S = 3.0
 REFRESH_PERIOD_S = 1.0
 RELOAD_PERIOD_S = 5.0
@@ -66,11 +64,8 @@ IMAGE_TYPES = frozenset(('sensor_msgs/msg/Image', 'sensor_msgs/msg/CompressedIma
 _TYPE_NAMES = {ParameterType.PARAMETER_BOOL: 'bool', ParameterType.PARAMETER_INTEGER: 'integer',
                ParameterType.PARAMETER_DOUBLE: 'double', ParameterType.PARAMETER_STRING: 'string'}
 _TYPE_OF_NAME = {name: kind for kind, name in _TYPE_NAMES.items()}
-_MENU_MARK = 'menu: '
 _LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
 _STATUS = ' status'  # the diagnostics' level and message, under a key no value can have
-_ALIAS = re.compile(r'\bname for ([A-Za-z0-9_]+)')
-_INACTIVE = re.compile(r'\binactive (while [^;]*)')
 
 
 def python_value(value: ParameterValue) -> Any:
@@ -87,24 +82,6 @@ def python_value(value: ParameterValue) -> Any:
     if kind == ParameterType.PARAMETER_NOT_SET:
         return None
     return '(a parameter of type %d)' % kind
-
-
-def parse_menu(description: str) -> Optional[List[Dict[str, Any]]]:
-    """Return the entries of 'menu: 1=Manual; 3=Auto' in a description, or None."""
-    at = description.find(_MENU_MARK)
-    if at < 0:
-        return None
-    entries = []
-    for item in description[at + len(_MENU_MARK):].split('; '):
-        value, equals, label = item.partition('=')
-        try:
-            number = int(value.strip())
-        except ValueError:
-            break
-        if not equals:
-            break
-        entries.append({'value': number, 'label': label.strip()})
-    return entries or None
 
 
 @dataclass
@@ -127,26 +104,21 @@ class Control:
     @classmethod
     def from_descriptor(cls, descriptor, value: ParameterValue) -> Optional['Control']:
         """Return the Control a descriptor describes, or None when it is neither kind."""
-        constraints = descriptor.additional_constraints
-        if constraints.startswith(CONTROL_MARK):
+        words = parse_constraints(descriptor.additional_constraints, tuple(_TYPE_OF_NAME))
+        if words is not None:
             group = 'camera'
         elif descriptor.name in STREAM_SETTINGS:
             group = 'stream'
         else:
             return None
         kind = _TYPE_NAMES.get(descriptor.type) or _TYPE_NAMES.get(value.type)
-        if kind is None:
+        if kind is None and words is not None:
             # Not set and dynamically typed: the control's type is named after the mark.
-            words = constraints[len(CONTROL_MARK):].split(';')[0].replace(',', ' ')
-            kind = next((word for word in words.split() if word in _TYPE_OF_NAME), None)
+            kind = words.kind
         control = cls(descriptor.name, kind, python_value(value), bool(descriptor.read_only),
                       group, descriptor.description, menu=parse_menu(descriptor.description))
         if group == 'camera':
-            # Optional words after the mark: 'name for <control>' (an alias), 'inactive while'.
-            alias = _ALIAS.search(constraints)
-            inactive = _INACTIVE.search(constraints)
-            control.alias_of = alias.group(1) if alias else None
-            control.inactive = inactive.group(1).strip() if inactive else None
+            control.alias_of, control.inactive = words.alias_of, words.inactive
         if descriptor.integer_range:
             bounds = descriptor.integer_range[0]
             control.min, control.max = bounds.from_value, bounds.to_value
@@ -487,7 +459,7 @@ class CameraPanel:
             if not current():
                 return
             wanted = [d for d in response.descriptors if d.name in INFO_PARAMETERS or
-                      d.additional_constraints.startswith(CONTROL_MARK) or
+                      is_control(d.additional_constraints) or
                       d.name in STREAM_SETTINGS]
             calls.call('get', GetParameters.Request(names=[d.name for d in wanted]),
                        lambda reply: got(wanted, reply), failed)

@@ -34,11 +34,10 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from py_vision.capture.controls import (
     Alias, BOOL, ControlInfo, MENU, OWNED_BY, USB_CAM_ALIASES)
+from py_vision.control_descriptor import alias_constraints, control_constraints, describe
 from py_vision.params import Parameters, Spec
 
 __all__ = ['ALIAS_HELP', 'ControlParameters', 'alias_spec', 'control_spec']
-
-CAMERA_CONTROL = 'camera control'
 
 
 def _kind(control: ControlInfo) -> type:
@@ -52,23 +51,16 @@ def _value(control: ControlInfo, alias: Optional[Alias] = None) -> Any:
     return bool(raw) if control.kind == BOOL else int(raw)
 
 
-def _description(control: ControlInfo) -> str:
-    if control.kind == MENU:
-        return '%s; menu: %s' % (control.label, control.menu_text())
-    return control.label
-
-
 def control_spec(control: ControlInfo) -> Spec:
     """Return the parameter of one device control, described by the device."""
-    constraints = '%s 0x%08x (%s, step %d, default %d)' % (
-        CAMERA_CONTROL, control.cid, control.kind, control.step, control.default)
+    inactive = None
     if control.inactive:
-        constraints += '; inactive while %s' % (
-            control.inactive_reason or 'an automatic mode controls it')
-    if control.read_only:
-        constraints += '; read-only'
+        inactive = control.inactive_reason
+    constraints = control_constraints(control.cid, control.kind, control.step, control.default,
+                                      inactive, control.read_only)
     value_range = None if control.kind == BOOL else (control.minimum, control.maximum)
-    return Spec(control.name, _value(control), _description(control), value_range,
+    description = describe(control.label, control.menu if control.kind == MENU else ())
+    return Spec(control.name, _value(control), description, value_range,
                 live=not control.read_only, step=control.step, constraints=constraints)
 
 
@@ -80,7 +72,7 @@ def alias_spec(alias: Alias, control: ControlInfo) -> Spec:
     return Spec(alias.name, _value(control, alias),
                 "%s (usb_cam's name for %s)" % (alias.description, control.name), value_range,
                 live=not control.read_only, step=control.step if value_range else 1,
-                constraints='%s: usb_cam name for %s' % (CAMERA_CONTROL, control.name))
+                constraints=alias_constraints(control.name))
 
 
 # For --help, before any camera is open: usb_cam's names, not set unless given.
@@ -108,6 +100,7 @@ class ControlParameters:
         self._log = log
         self._specs: Dict[str, Spec] = {}
         self._targets: Dict[str, Tuple[int, Optional[Alias]]] = {}  # name -> (cid, alias)
+        parameters.add_check(self.refusal)
 
     @property
     def names(self) -> List[str]:
@@ -158,7 +151,35 @@ class ControlParameters:
         for name in wanted:
             spec = self._spec(name, by_id)
             self._specs[name] = spec
-            self._parameters.declare_shown(spec, self._setter(name) if spec.live else None)
+            self._parameters.declare_shown(spec, self._setter(name) if spec.live else None,
+                                           first=self._targets[name][0] in owners)
+
+    def refusal(self, changes: Dict[str, Any]) -> Optional[str]:
+        """
+        Return why the camera would refuse one of changes (name -> value) made together.
+
+        None when it takes them all. A control inactive now counts as active when the same
+        changes switch off the automatic mode that owns it. A camera that is lost answers
+        nothing here: applying the changes reports it.
+        """
+        by_id = {control.cid: control for control in self._read_controls()}
+        wanted = []  # (name, alias, control, device value)
+        for name, value in changes.items():
+            if name not in self._targets or self._targets[name][0] not in by_id:
+                continue
+            cid, alias = self._targets[name]
+            control = by_id[cid]
+            wanted.append((name, alias, control,
+                           alias.to_device(value, control) if alias else int(value)))
+        raw = {control.cid: device_value for _, _, control, device_value in wanted}
+        for name, alias, control, device_value in wanted:
+            owner, frees = OWNED_BY.get(control.cid, (None, ()))
+            if control.inactive and raw.get(owner) in frees:
+                control = replace(control, inactive=False)
+            reason = control.refusal(device_value)
+            if reason:
+                return reason.replace(control.name, name, 1) if alias else reason
+        return None
 
     def _spec(self, name, by_id) -> Spec:
         cid, alias = self._targets[name]

@@ -53,8 +53,9 @@ class ManagedPublisher(LifecycleNodeMixin, USBImagePublisher):
 
     _state = 'unconfigured'
 
-    def __init__(self):
-        Node.__init__(self, self.NODE_NAME)
+    def __init__(self, **node_options):
+        # node_options: rclpy Node's keyword arguments (context, parameter_overrides...).
+        Node.__init__(self, self.NODE_NAME, **node_options)
         LifecycleNodeMixin.__init__(self)
         # Checked at configure: an unusable value fails configure instead of ending the node.
         self._parameter_errors = []
@@ -112,8 +113,12 @@ class ManagedPublisher(LifecycleNodeMixin, USBImagePublisher):
         return SUCCESS
 
     def on_cleanup(self, state):
-        """Release the camera and the publishers."""
-        self._release_all()
+        """Release the camera and the publishers; fail, keeping both, if it will not close."""
+        if not self._release_all():
+            self.get_logger().error(
+                'cleanup failed: the capture thread of %s did not end; the camera and its '
+                'topics are kept (try cleanup again)' % self.video_device)
+            return FAILURE
         self._state = 'unconfigured'
         self.get_logger().info('cleaned up: camera released')
         return SUCCESS
@@ -156,8 +161,12 @@ class ManagedPublisher(LifecycleNodeMixin, USBImagePublisher):
             self.set_info_service = None
 
     def _release_all(self):
-        self._close_camera()
+        """Close the camera, then the topics; False, keeping the topics, if it did not close."""
+        # A capture thread still running may publish at any moment: its publishers stay.
+        if not self._close_camera():
+            return False
         self._release_topics()
+        return True
 
     def _exit(self):
         self.destroy_timer(self._exit_timer)

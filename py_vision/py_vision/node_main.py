@@ -22,6 +22,9 @@ The `main()` every py_vision executable shares: start-up, spin and a quiet, clea
   a last line `stopped by SIGINT` after its clean-up, whatever it was doing when the signal came.
   The first signal stops the node; further ones (`ros2 launch` sends its own SIGINT after the
   terminal's) are ignored, so the clean-up always runs to its end.
+- A node's command (``usbcam_publisher --list-formats``) interrupted by Ctrl-C or SIGTERM ends
+  at once, without a traceback, with the shell's status for it (130 for SIGINT, 143 for
+  SIGTERM): unlike a node, whose normal end is a signal, the command did not finish its work.
 
 How a signal reaches the executor (docs/internals.md says why it is done this way): rclpy's own
 handler is not installed. Python's C-level handler, in whichever thread the kernel picks,
@@ -74,6 +77,29 @@ def install_quiet_signals():
     if threading.current_thread() is threading.main_thread():
         for sig in (signal.SIGINT, signal.SIGTERM):
             signal.signal(sig, _on_signal)
+
+
+class _Interrupted(Exception):
+    """A node command was interrupted by a signal."""
+
+
+def _interrupt(signum, frame):
+    _ignore_signals()
+    raise _Interrupted(signum)
+
+
+def _run_command(command, argv):
+    """Run a node's command; a signal ends it quietly with status 128 + the signal's number."""
+    if threading.current_thread() is not threading.main_thread():
+        return command(argv)
+    try:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, _interrupt)
+        return command(argv)
+    except _Interrupted as stop:
+        return 128 + stop.args[0]
+    finally:
+        _ignore_signals()  # what is left is the exit
 
 
 class SignalWatch:
@@ -182,7 +208,7 @@ def run(node_class, args=None):
     # the node, without a ROS graph: usbcam_publisher --list-formats.
     for flag, command in getattr(node_class, 'COMMANDS', {}).items():
         if flag in argv[1:]:
-            return command(argv)
+            return _run_command(command, argv)
     # From here a signal is a request, carried out at the next of the checks below: rclpy
     # starting or the node being built is never cut short (a context shut down while a
     # service or a timer is being created can deadlock), and what was built is closed.

@@ -213,7 +213,18 @@ class Parameters:
         self._node = node
         self._specs: Dict[str, Tuple[Spec, Optional[Callable[[Any], None]]]] = {}
         self._declaring = False
+        self._first: set = set()
+        self._checks: list = []
         node.add_on_set_parameters_callback(self._on_set)
+
+    def add_check(self, check: Callable[[Dict[str, Any]], Optional[str]]) -> None:
+        """
+        Add a check of a whole set of changes, made before any of them is applied.
+
+        check(changes) gets every live parameter changed at once (name -> checked value) and
+        returns None, or why the set is refused: then nothing is applied.
+        """
+        self._checks.append(check)
 
     def declare(self, spec: Spec, on_change: Optional[Callable[[Any], Optional[str]]] = None
                 ) -> Any:
@@ -252,11 +263,19 @@ class Parameters:
         return value
 
     def declare_shown(self, spec: Spec,
-                      on_change: Optional[Callable[[Any], Optional[str]]] = None) -> None:
-        """Declare spec's parameter with spec.default, what the node found (a camera's value)."""
+                      on_change: Optional[Callable[[Any], Optional[str]]] = None,
+                      first: bool = False) -> None:
+        """
+        Declare spec's parameter with spec.default, what the node found (a camera's value).
+
+        first: when set together with others, this one is applied before them (an automatic
+        mode before the controls it owns).
+        """
         if spec.live and on_change is None:
             raise ValueError('live parameter %s needs an on_change callback' % spec.name)
         self._specs[spec.name] = (spec, on_change)
+        if first:
+            self._first.add(spec.name)
         self._declaring = True
         try:
             self._node.declare_parameter(spec.name, spec.default, spec.descriptor(),
@@ -281,19 +300,40 @@ class Parameters:
         Show values the node learned elsewhere (a camera's) without applying them again.
 
         specs: new descriptors for parameters whose description changed (e.g. a control that
-        became inactive). Read-only parameters keep the value they were declared with.
+        became inactive, or a new range). Called from a timer, it never raises: what rclpy will
+        not let change is left as it is. A parameter declared read-only stays read-only (rclpy
+        cannot change its descriptor or its value); one whose value falls outside its new range
+        takes the value in values at the same time.
         """
         node = self._node
         self._declaring = True
         try:
             for spec in specs:
-                if node.has_parameter(spec.name) and spec.live:
-                    node.set_descriptor(spec.name, spec.descriptor())
-            changes = [Parameter(name, value=value) for name, value in values.items()
-                       if node.has_parameter(name) and node.get_parameter(name).value != value
-                       and self._specs[name][0].live]
-            if changes:
-                node.set_parameters(changes)
+                if not node.has_parameter(spec.name) or node.describe_parameter(
+                        spec.name).read_only:
+                    continue
+                if not spec.live:
+                    continue  # cannot be made read-only after declaration; the device refuses
+                alternative = None
+                if spec.name in values:
+                    alternative = Parameter(spec.name, value=values[spec.name]
+                                            ).get_parameter_value()
+                try:
+                    node.set_descriptor(spec.name, spec.descriptor(), alternative)
+                except Exception:  # noqa: B902 - rclpy refuses: keep the old descriptor
+                    continue
+                self._specs[spec.name] = (spec, self._specs.get(spec.name, (None, None))[1])
+            for name, value in values.items():
+                if not node.has_parameter(name) or name not in self._specs:
+                    continue
+                if not self._specs[name][0].live or node.describe_parameter(name).read_only:
+                    continue
+                if node.get_parameter(name).value == value:
+                    continue
+                try:
+                    node.set_parameters([Parameter(name, value=value)])
+                except Exception:  # noqa: B902 - a value rclpy refuses stays as it was
+                    continue
         finally:
             self._declaring = False
 
@@ -302,7 +342,7 @@ class Parameters:
         # this checks the rest and applies the changes only when all of them are acceptable.
         if self._declaring:
             return SetParametersResult(successful=True)
-        changes = []
+        changes = {}
         for parameter in parameters:
             spec, on_change = self._specs.get(parameter.name, (None, None))
             if spec is None or on_change is None:
@@ -315,11 +355,26 @@ class Parameters:
                 return SetParametersResult(
                     successful=False, reason='parameter %s cannot be undeclared' % parameter.name)
             try:
-                changes.append((on_change, spec.coerce(parameter.value)))
+                changes[parameter.name] = spec.coerce(parameter.value)
             except ConfigError as error:
                 return SetParametersResult(successful=False, reason=str(error))
-        for on_change, value in changes:
-            reason = on_change(value)
+        for check in self._checks:
+            reason = check(dict(changes))
             if reason:
                 return SetParametersResult(successful=False, reason=reason)
+        applied = []
+        for name in sorted(changes, key=lambda name: name not in self._first):
+            reason = self._specs[name][1](changes[name])
+            if reason:
+                self._undo(applied)
+                return SetParametersResult(successful=False, reason=reason)
+            applied.append(name)
         return SetParametersResult(successful=True)
+
+    def _undo(self, names):
+        # The device refused a change that passed every check: put back what was applied.
+        for name in reversed(names):
+            if self._node.has_parameter(name):
+                old = self._node.get_parameter(name).value
+                if old is not None:
+                    self._specs[name][1](old)

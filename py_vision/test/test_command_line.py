@@ -20,6 +20,7 @@ import random
 import re
 import signal
 import subprocess
+import sys
 import time
 
 from param_client import describe_parameters, get_parameters
@@ -212,3 +213,29 @@ def test_without_a_sourced_workspace_it_says_what_to_source(executable):
     lines = done.stderr.splitlines()
     assert len(lines) == 1 and 'source install/setup.bash' in lines[0], done.stderr
     assert lines[0].startswith('%s: cannot start' % executable)
+
+
+# A node whose command is interrupted by Ctrl-C while it works (the signal is its own, sent
+# from inside the command: no timing involved).
+INTERRUPTED_COMMAND = """
+import os, signal, sys
+from py_vision.node_main import run
+
+class Lister:
+    NODE_NAME = 'lister'
+    def listing(argv):
+        print('listing...', flush=True)
+        os.kill(os.getpid(), signal.%s)
+        print('listed')
+        return 0
+    COMMANDS = {'--list': listing}
+
+sys.exit(run(Lister, ['lister', '--list']))
+"""
+
+
+@pytest.mark.parametrize('name,status', [('SIGINT', 130), ('SIGTERM', 143)])
+def test_a_command_interrupted_by_a_signal_ends_quietly(ros_env, name, status):
+    done = subprocess.run([sys.executable, '-c', INTERRUPTED_COMMAND % name],
+                          env=ros_env, capture_output=True, text=True, timeout=60)
+    assert (done.returncode, done.stdout, done.stderr) == (status, 'listing...\n', '')

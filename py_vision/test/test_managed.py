@@ -26,7 +26,10 @@ from diagnostic_msgs.msg import DiagnosticArray
 from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
 from param_client import get_parameters
+from py_vision.managed_publisher import ManagedPublisher
 import pytest
+from rclpy.lifecycle import TransitionCallbackReturn
+from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_harness import wait_until
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
@@ -284,3 +287,34 @@ def test_the_plain_node_is_not_a_lifecycle_node(launch, peer):
         return names if '/%s/set_parameters' % NODE in names else None
     services = wait_until(listed, 30, 0.1, 'the services of %s in the graph' % NODE)
     assert not [name for name in services if 'change_state' in name or 'get_state' in name]
+
+
+class StuckCapture(ManagedPublisher):
+    """The managed node, with a capture thread that does not end when asked (on demand)."""
+
+    stuck = False
+
+    def _close_camera(self):
+        if self.stuck:
+            return False
+        return super()._close_camera()
+
+
+def test_cleanup_fails_and_keeps_the_topics_when_the_capture_thread_does_not_end(peer):
+    node = StuckCapture(context=peer.context, parameter_overrides=[
+        Parameter(name, value=value) for name, value in CAMERA.items() if name != 'managed'])
+    try:
+        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
+        topics = node.images
+        node.stuck = True
+        # The thread may still publish: its publishers stay, and the node says why it failed.
+        assert node.trigger_cleanup() == TransitionCallbackReturn.FAILURE
+        assert node.images is topics and node.images.raw.handle is not None
+        assert node.lifecycle_state() == 'inactive'
+        node.stuck = False
+        assert node.trigger_cleanup() == TransitionCallbackReturn.SUCCESS
+        assert node.images is None
+    finally:
+        node.stuck = False
+        node.close()
+        node.destroy_node()
