@@ -14,9 +14,20 @@
 
 """What `ros2 param set/get/describe` do, through a test peer: the node's parameter services."""
 
+import time
+
 from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
 from rcl_interfaces.srv import DescribeParameters, GetParameters, SetParameters
 from ros_harness import wait_until
+
+
+# wait_for_service() says this side has found the node's service, not that the node has found
+# this client's reply reader: Fast DDS drops a reply sent before it has (the node logs 'failed to
+# send response (timeout)') and the request would wait forever. Parameter requests here are
+# idempotent (the same set, get or describe again), so one unanswered for a few seconds is sent
+# again, as a user repeats `ros2 param get`.
+RESEND_AFTER_S = 4.0
+ANSWER_WITHIN_S = 20.0
 
 
 def _call(peer, node_name, service_type, service, request):
@@ -24,9 +35,19 @@ def _call(peer, node_name, service_type, service, request):
     try:
         assert client.wait_for_service(timeout_sec=20), 'no %s service on %s' % (
             service, node_name)
-        future = client.call_async(request)
-        wait_until(future.done, 20, what='%s reply from %s' % (service, node_name))
-        return future.result()
+        deadline = time.monotonic() + ANSWER_WITHIN_S
+        while True:
+            future = client.call_async(request)
+            left = deadline - time.monotonic()
+            try:
+                wait_until(future.done, max(0.1, min(RESEND_AFTER_S, left)),
+                           what='%s reply from %s' % (service, node_name))
+                return future.result()
+            except AssertionError:
+                client.remove_pending_request(future)
+                if left <= RESEND_AFTER_S:
+                    raise AssertionError('timed out after %.1f s waiting for %s reply from %s' % (
+                        ANSWER_WITHIN_S, service, node_name)) from None
     finally:
         peer.node.destroy_client(client)  # a test calling many times keeps one client at a time
 
