@@ -111,10 +111,11 @@ def test_a_camera_plugged_back_elsewhere_is_found_by_id_with_its_controls(
     frames = peer.collect(Image, 'usb_camera/image')
     node = start(launch, camera, ros_env, video_device=camera.by_id, framerate=30.0,
                  brightness=200, auto_white_balance=False, white_balance=3000)
-    node.wait_for_output('opened', 30)
+    # The node streams only once the controls it was given are set on the camera ('opened'
+    # is logged before that), so its first frame is the moment to read them.
+    wait_until(lambda: frames, 30, what='frames')
     assert (camera.control('brightness'), camera.control('white_balance_automatic'),
             camera.control('white_balance_temperature')) == (200, 0, 3000)
-    wait_until(lambda: frames, 30, what='frames')
     camera.unplug()
     node.wait_for_output('lost %s' % camera.by_id, 30)
     camera.replug(node=camera.node + 2)   # another /dev/video node; by-id follows
