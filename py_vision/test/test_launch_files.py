@@ -33,7 +33,8 @@ PROMISED = {
     'camera.launch.py': {'executables': {'usbcam_publisher'}, 'arguments': CAMERA_ARGUMENTS},
     'pipeline.launch.py': {'executables': {'usbcam_publisher', 'cv_bridge_test',
                                            'usbcam_subscriber'},
-                           'arguments': CAMERA_ARGUMENTS | {'display'}},
+                           'arguments': CAMERA_ARGUMENTS | {'display', 'web_host', 'web_port',
+                                                            'web_token'}},
 }
 
 
@@ -163,6 +164,18 @@ def test_camera_arguments_reach_the_node_typed_as_its_parameters():
                 assert kind == in_file[argument], argument
     assert typed['video_device'] == 'str'
     assert typed['pixel_format'] == 'str'
+
+
+def test_viewer_arguments_reach_the_viewer_typed_as_its_parameters():
+    # web_port:=0 must be the integer 0 (any free port), web_token:=0123... a string.
+    viewer = yaml.safe_load((ros_harness.SHARE / 'config' / 'params.yaml').read_text())[
+        'usbcam_subscriber']['ros__parameters']
+    typed = LaunchFile('pipeline.launch.py').declared()
+    for argument in ('display', 'web_host', 'web_port', 'web_token'):
+        assert typed[argument] == type(viewer[argument]).__name__, argument
+    source = ast.unparse(LaunchFile('pipeline.launch.py').tree)
+    assert 'for name, (kind, _) in VIEWER_ARGUMENTS.items()' in source, \
+        'every viewer argument given reaches the viewer'
 
 
 def test_the_pipeline_viewer_watches_the_processed_topic():
