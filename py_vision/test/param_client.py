@@ -70,14 +70,30 @@ def set_parameter(peer, node_name, name, value):
     return _call(peer, node_name, SetParameters, 'set_parameters', request).results[0]
 
 
+def _one_each(peer, node_name, service, names, answer):
+    # rclpy answers nothing at all when one of the names is not declared: say so, with who
+    # in the graph could have answered, rather than fail later on an empty list.
+    if len(answer) != len(names):
+        raise AssertionError(
+            '%s of %s answered %d item(s) for %d name(s) %s: one of them is not declared '
+            '(servers of /%s/%s in the graph: %d; nodes: %s)' % (
+                service, node_name, len(answer), len(names), list(names), node_name, service,
+                peer.node.count_services('/%s/%s' % (node_name, service)),
+                sorted(ns.rstrip('/') + '/' + name
+                       for name, ns in peer.node.get_node_names_and_namespaces())))
+    return answer
+
+
 def get_parameters(peer, node_name, names):
-    """Return the ParameterValues of names, in order."""
+    """Return the ParameterValues of names, in order (AssertionError: one is not declared)."""
     request = GetParameters.Request(names=list(names))
-    return _call(peer, node_name, GetParameters, 'get_parameters', request).values
+    return _one_each(peer, node_name, 'get_parameters', names,
+                     _call(peer, node_name, GetParameters, 'get_parameters', request).values)
 
 
 def describe_parameters(peer, node_name, names):
-    """Return the ParameterDescriptors of names, in order."""
+    """Return the ParameterDescriptors of names, in order (AssertionError: one is not declared)."""
     request = DescribeParameters.Request(names=list(names))
-    return _call(peer, node_name, DescribeParameters, 'describe_parameters',
-                 request).descriptors
+    return _one_each(peer, node_name, 'describe_parameters', names,
+                     _call(peer, node_name, DescribeParameters, 'describe_parameters',
+                           request).descriptors)
