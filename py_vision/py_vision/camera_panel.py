@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import math
 import threading
 import time
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from py_vision.control_descriptor import is_control, parse_constraints, parse_menu
 from py_vision.web_viewer import CameraError
@@ -193,11 +193,17 @@ class _Calls:
     def ready(self, key: str) -> bool:
         return self.clients[key].service_is_ready()
 
-    def call(self, key: str, request, on_reply, on_timeout):
-        """Send request; on_reply(response) or on_timeout() follows on the executor thread."""
+    def call(self, key: str, request, on_reply: Callable[[Any], None],
+             on_failure: Callable[[str], None]) -> None:
+        """
+        Send request; on_reply(response) or on_failure(why) follows on the executor thread.
+
+        on_failure is called when there is no answer within the timeout, or when the node's
+        clients are destroyed first (the node left the graph).
+        """
         client = self.clients[key]
         future = client.call_async(request)
-        entry = (time.monotonic() + self._timeout, client, future, on_timeout)
+        entry = (time.monotonic() + self._timeout, client, future, on_failure)
         self._pending.append(entry)
 
         def done(finished):
@@ -206,18 +212,23 @@ class _Calls:
                 on_reply(finished.result())
         future.add_done_callback(done)
 
-    def expire(self):
+    def expire(self) -> None:
         """Give up the calls that have had no answer within the timeout."""
         now = time.monotonic()
         for entry in [e for e in self._pending if e[0] < now]:
-            self._pending.remove(entry)
-            entry[1].remove_pending_request(entry[2])
-            entry[3]()
+            self._give_up(entry, 'did not answer within %g s' % self._timeout)
 
-    def destroy(self):
+    def destroy(self, why: str) -> None:
+        """Destroy the clients; every call still waiting fails with why."""
+        for entry in list(self._pending):
+            self._give_up(entry, why)
         for client in self.clients.values():
             self._node.destroy_client(client)
-        self._pending.clear()
+
+    def _give_up(self, entry, why):
+        self._pending.remove(entry)
+        entry[1].remove_pending_request(entry[2])
+        entry[3](why)
 
 
 class CameraPanel:
@@ -356,11 +367,18 @@ class CameraPanel:
             answer.set_exception(CameraError(503, '%s does not offer its parameter services '
                                              'now' % publisher))
         else:
-            calls.call('set', SetParameters.Request(parameters=parameters),
-                       lambda response: answer.set_result(response.results),
-                       lambda: answer.set_exception(CameraError(504, '%s did not answer within '
-                                                                '%g s' % (publisher,
-                                                                          self._timeout))))
+            def replied(response):
+                if len(response.results) == len(parameters):
+                    answer.set_result(response.results)
+                else:
+                    answer.set_exception(CameraError(502, '%s answered %d result(s) for %d '
+                                                     'parameter(s)' % (publisher,
+                                                                       len(response.results),
+                                                                       len(parameters))))
+            calls.call('set', SetParameters.Request(parameters=parameters), replied,
+                       lambda why: answer.set_exception(CameraError(
+                           504 if why.startswith('did not answer') else 503,
+                           '%s %s' % (publisher, why))))
 
     def _publishers_of(self, topic, *others):
         """Return the nodes publishing topic (a graph name), but this one and others."""
@@ -413,7 +431,8 @@ class CameraPanel:
             self._via = via
         if publisher != self._publisher:
             if self._calls is not None:
-                self._calls.destroy()
+                self._calls.destroy('left: %s publishes %s now' % (
+                    publisher, self._topic) if publisher else 'left the graph')
             self._calls = (_Calls(self._node, publisher, self._timeout)
                            if publisher is not None else None)
             self._generation += 1
@@ -442,21 +461,30 @@ class CameraPanel:
         def current():
             return generation == self._generation
 
-        def failed():
+        def failed(why):
             if current():
                 self._loading = False
                 with self._lock:
-                    self._problem = '%s did not answer within %g s' % (
-                        self._publisher, self._timeout)
+                    self._problem = '%s %s' % (self._publisher, why)
+
+        def changed():
+            # rclpy answers a describe or a get with nothing at all when one of the names is
+            # not declared any more: the node's parameters changed under the read. That says
+            # nothing about its controls: read them all again at the next refresh.
+            failed('changed its parameters while they were read; reading them again')
+            self._last_load = -math.inf
 
         def listed(response):
             if current():
                 names = list(response.result.names)
                 calls.call('describe', DescribeParameters.Request(names=names),
-                           described, failed)
+                           lambda reply: described(names, reply), failed)
 
-        def described(response):
+        def described(names, response):
             if not current():
+                return
+            if len(response.descriptors) != len(names):
+                changed()
                 return
             wanted = [d for d in response.descriptors if d.name in INFO_PARAMETERS or
                       is_control(d.additional_constraints) or
@@ -466,6 +494,9 @@ class CameraPanel:
 
         def got(descriptors, response):
             if not current():
+                return
+            if len(response.values) != len(descriptors):
+                changed()
                 return
             controls, info = {}, {}
             for descriptor, value in zip(descriptors, response.values):

@@ -409,3 +409,57 @@ def test_what_the_camera_is_comes_from_its_diagnostics_when_it_publishes_them(la
                                       'size': '1280x720', 'fps': 29.8, 'requested_fps': 30.0,
                                       'status': 'WARN: 29.8 fps, requested 30.0',
                                       'diagnostics': True}
+
+
+def test_parameters_changing_under_the_read_are_read_again_not_taken_for_no_controls(
+        launch, peer):
+    # A camera node whose parameters change while the panel reads them: rclpy then answers
+    # a describe or a get with nothing at all (one of the names is not declared any more).
+    # The panel must read again, not conclude the node has no controls (and look for a
+    # camera up a pipeline that is not there).
+    from rcl_interfaces.msg import IntegerRange, ParameterDescriptor, ParameterValue
+    from rcl_interfaces.srv import DescribeParameters, GetParameters
+    from sensor_msgs.msg import Image
+    import rclpy
+    node = rclpy.create_node('moving_camera', context=peer.context,
+                             start_parameter_services=False)
+    peer.executor.add_node(node)
+    node.create_publisher(Image, 'usb_camera/image', 10)
+    # It also takes images from another node (as cv_bridge_test does): a panel that took it
+    # for a processing node would show that node instead.
+    node.create_subscription(Image, 'upstream/image', lambda msg: None, 10)
+    peer.node.create_publisher(Image, 'upstream/image', 10)
+    brightness = ParameterDescriptor(
+        name='brightness', type=2, additional_constraints=CONTROL_MARK,
+        integer_range=[IntegerRange(from_value=-64, to_value=64, step=1)])
+    short = {'describe': 1, 'get': 1}   # answers left to give short, per service
+
+    def listed(request, response):
+        response.result.names = ['brightness']
+        return response
+
+    def described(request, response):
+        if short['describe']:
+            short['describe'] -= 1
+        else:
+            response.descriptors = [brightness for _ in request.names]
+        return response
+
+    def got(request, response):
+        if short['get']:
+            short['get'] -= 1
+        else:
+            response.values = [ParameterValue(type=2, integer_value=12) for _ in request.names]
+        return response
+    node.create_service(ListParameters, '/moving_camera/list_parameters', listed)
+    node.create_service(DescribeParameters, '/moving_camera/describe_parameters', described)
+    node.create_service(GetParameters, '/moving_camera/get_parameters', got)
+
+    _, port, _ = start_viewer(launch)
+    state = wait_until(lambda: (lambda s: s if s['controls'] else None)(camera(port)), 30,
+                       interval=0.2, what='the controls of moving_camera in GET /camera')
+    assert short == {'describe': 0, 'get': 0}, 'both short answers were given'
+    assert state['publisher'] == '/moving_camera' and state['via'] == []
+    assert state['controls']['brightness']['value'] == 12
+    assert (state['controls']['brightness']['min'], state['controls']['brightness']['max']) == \
+        (-64, 64)
