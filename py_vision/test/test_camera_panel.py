@@ -463,3 +463,41 @@ def test_parameters_changing_under_the_read_are_read_again_not_taken_for_no_cont
     assert state['controls']['brightness']['value'] == 12
     assert (state['controls']['brightness']['min'], state['controls']['brightness']['max']) == \
         (-64, 64)
+
+
+def test_a_call_on_its_way_when_the_node_leaves_fails_at_once_with_the_reason():
+    from concurrent.futures import Future
+    from py_vision.camera_panel import _Calls
+
+    class Client:
+        def __init__(self):
+            self.removed = []
+
+        def call_async(self, request):
+            return Future()   # never answered: the node went away
+
+        def remove_pending_request(self, future):
+            self.removed.append(future)
+
+    class Node:
+        def __init__(self):
+            self.destroyed = []
+
+        def create_client(self, kind, name):
+            return Client()
+
+        def destroy_client(self, client):
+            self.destroyed.append(client)
+
+    node = Node()
+    calls = _Calls(node, '/usbcam_publisher', timeout=3.0)
+    failures, replies = [], []
+    calls.call('set', object(), replies.append, failures.append)
+    calls.expire()
+    assert failures == []   # within its timeout
+    calls.destroy('left the graph')
+    assert failures == ['left the graph'] and replies == []
+    assert len(calls.clients['set'].removed) == 1
+    assert len(node.destroyed) == len(_Calls.SERVICES)
+    calls.expire()
+    assert failures == ['left the graph'], 'a failed call is not failed again'
