@@ -44,6 +44,7 @@ ones get a short 503 answer.
 import errno
 import hmac
 import html
+import io
 from http.cookies import CookieError, SimpleCookie
 from http.server import BaseHTTPRequestHandler, HTTPServer
 import ipaddress
@@ -65,6 +66,9 @@ import numpy as np
 _BOUNDARY = 'py_vision_frame'
 # A client that accepts no data for this long (it vanished or stalled) is dropped.
 _SOCKET_TIMEOUT = 10.0
+# A request (line, headers and body) must have arrived whole this long after the connection:
+# a client sending it a byte at a time cannot hold one of the few connections.
+_REQUEST_TIME = 10.0
 # How often an idle stream thread checks that its client is still there.
 _IDLE_CHECK = 1.0
 # Short requests (the page, /stats, snapshots) beyond the video clients: enough for every
@@ -185,11 +189,41 @@ class _Server(ThreadingMixIn, HTTPServer):
         self.viewer._log_handler_error(client_address)
 
 
+class _RequestReader(io.RawIOBase):
+    """The request side of one connection: every read ends by the request's deadline."""
+
+    def __init__(self, connection: socket.socket, deadline: float):
+        super().__init__()
+        self._connection = connection
+        self._deadline = deadline
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer) -> int:
+        left = self._deadline - time.monotonic()
+        if left <= 0:
+            raise TimeoutError('the request did not arrive within %g s' % _REQUEST_TIME)
+        # The socket's own timeout stays what the answer is written with.
+        self._connection.settimeout(min(left, _SOCKET_TIMEOUT))
+        try:
+            return self._connection.recv_into(buffer)
+        finally:
+            self._connection.settimeout(_SOCKET_TIMEOUT)
+
+
 class _Handler(BaseHTTPRequestHandler):
     """Serves the routes of one connection, then closes it."""
 
     protocol_version = 'HTTP/1.1'
     timeout = _SOCKET_TIMEOUT
+
+    def setup(self):
+        super().setup()
+        # http.server reads the request line, the headers and the body through rfile: a
+        # timeout there ends the connection quietly (handle_one_request).
+        self.rfile = io.BufferedReader(
+            _RequestReader(self.connection, time.monotonic() + _REQUEST_TIME))
 
     def version_string(self):
         return 'py_vision'

@@ -501,3 +501,31 @@ def test_a_token_given_is_required_on_loopback_too(make_viewer):
     status, headers, _ = request(viewer, '/?token=a-token-of-16-chars')
     assert status == 303 and headers['location'] == '/'
     assert headers['set-cookie'].startswith('py_vision_token_%d=' % viewer.port)
+
+
+def test_a_client_that_sends_its_request_slowly_is_dropped_and_its_slot_freed(
+        make_viewer, monkeypatch):
+    # A client that keeps a connection by sending its request a byte at a time (within the
+    # socket timeout each) would hold one of the few connections for ever: the request as a
+    # whole must arrive within the viewer's request time.
+    import time
+    from py_vision import web_viewer
+    monkeypatch.setattr(web_viewer, '_REQUEST_TIME', 1.0)
+    viewer = make_viewer(max_clients=1)
+    slow = connect(viewer, timeout=0.2)
+    slow.sendall(b'GET / HTTP/1.1\r\n')
+    dropped = False
+    give_up = time.monotonic() + 8.0   # eight times the request time
+    while not dropped and time.monotonic() < give_up:
+        try:
+            slow.sendall(b'X')
+            dropped = slow.recv(1) == b''
+        except socket.timeout:
+            continue   # still open: the viewer is waiting for the rest
+        except OSError:
+            dropped = True   # reset by the viewer
+    slow.close()
+    assert dropped, 'a request trickling in for 8 s still holds its connection'
+    with connect(viewer) as fast:
+        fast.sendall(b'GET /stats HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n')
+        assert parse_head(fast.recv(65536))[0] == 200
