@@ -27,9 +27,9 @@ raises ConfigError naming the parameter and what it accepts.
 
 from dataclasses import dataclass
 import math
-import string
 from typing import Any, Callable, Dict, Optional, Sequence, Tuple
 
+from py_vision.web_viewer import good_token, TOKEN_RULE
 from rcl_interfaces.msg import (
     FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
 import rclpy
@@ -166,11 +166,8 @@ def help_text(executable: str, specs: Sequence[Spec], summary: str) -> str:
     return '\n'.join(lines) + '\n'
 
 
-_TOKEN_CHARACTERS = frozenset(string.ascii_letters + string.digits + '-_.~')
-
-
 def _good_token(token: str) -> bool:
-    return token == '' or (len(token) >= 16 and set(token) <= _TOKEN_CHARACTERS)
+    return token == '' or good_token(token)
 
 
 def viewer_specs(display_default: str, displays: Sequence[str]) -> Tuple[Spec, ...]:
@@ -184,7 +181,7 @@ def viewer_specs(display_default: str, displays: Sequence[str]) -> Tuple[Spec, .
         Spec('web_port', 8080, 'port of the browser viewer (0: any free port)', (0, 65535)),
         Spec('web_token', '', 'the token the browser viewer requires when web_host is not a '
              'loopback address (empty: a random one at each start, logged as the URL to open)',
-             check=_good_token, accepted='empty, or at least 16 of A-Z a-z 0-9 - _ . ~'),
+             check=_good_token, accepted='empty, or ' + TOKEN_RULE),
     )
 
 

@@ -44,9 +44,9 @@ ones get a short 503 answer.
 import errno
 import hmac
 import html
-import io
 from http.cookies import CookieError, SimpleCookie
 from http.server import BaseHTTPRequestHandler, HTTPServer
+import io
 import ipaddress
 import json
 import logging
@@ -55,6 +55,7 @@ import secrets
 import select
 import socket
 from socketserver import ThreadingMixIn
+import string
 import threading
 import time
 from typing import Any, Dict, Optional, Protocol
@@ -77,6 +78,14 @@ _EXTRA_CONNECTIONS = 16
 _WILDCARD_HOSTS = ('', '0.0.0.0', '::')
 # The largest request body taken (a POST of controls is a few hundred bytes).
 MAX_BODY = 16384
+# A token given to the viewer: long enough not to be guessed, and safe in a URL and a cookie.
+TOKEN_RULE = 'at least 16 of A-Z a-z 0-9 - _ . ~'
+_TOKEN_CHARACTERS = frozenset(string.ascii_letters + string.digits + '-_.~')
+
+
+def good_token(token: str) -> bool:
+    """Return True when token follows TOKEN_RULE."""
+    return len(token) >= 16 and set(token) <= _TOKEN_CHARACTERS
 
 
 class WebViewerError(Exception):
@@ -463,8 +472,8 @@ class WebViewer:
         """
         Make a viewer for host:port; nothing is bound before start().
 
-        token: what every request must carry. Empty: none on a loopback host, and a random
-        one (see `url`) on any other.
+        token: what every request must carry (TOKEN_RULE; ValueError if not). Empty: none
+        on a loopback host, and a random one (see `url`) on any other.
         """
         if not 1 <= int(max_clients):
             raise ValueError('max_clients must be at least 1, got %r' % max_clients)
@@ -478,6 +487,8 @@ class WebViewer:
         self._throttled = _ThrottledLog(self._logger)
         self._page = _page(title)
         if token:
+            if not good_token(token):
+                raise ValueError('token must be %s' % TOKEN_RULE)
             self.token = token
         else:
             self.token = None if is_loopback(host) else secrets.token_urlsafe(24)

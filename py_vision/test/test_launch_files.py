@@ -171,8 +171,9 @@ def test_viewer_arguments_reach_the_viewer_typed_as_its_parameters():
     viewer = yaml.safe_load((ros_harness.SHARE / 'config' / 'params.yaml').read_text())[
         'usbcam_subscriber']['ros__parameters']
     typed = LaunchFile('pipeline.launch.py').declared()
+    in_file = {name: type(value).__name__ for name, value in viewer.items()}
     for argument in ('display', 'web_host', 'web_port', 'web_token'):
-        assert typed[argument] == type(viewer[argument]).__name__, argument
+        assert typed[argument] == in_file[argument], argument
     source = ast.unparse(LaunchFile('pipeline.launch.py').tree)
     assert 'for name, (kind, _) in VIEWER_ARGUMENTS.items()' in source, \
         'every viewer argument given reaches the viewer'

@@ -529,3 +529,11 @@ def test_a_client_that_sends_its_request_slowly_is_dropped_and_its_slot_freed(
     with connect(viewer) as fast:
         fast.sendall(b'GET /stats HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n')
         assert parse_head(fast.recv(65536))[0] == 200
+
+
+@pytest.mark.parametrize('token', ['short', 'sixteen chars ok', 'a' * 15 + '/', 'é' * 20])
+def test_a_token_that_is_guessable_or_unsafe_in_a_url_is_refused(token):
+    with pytest.raises(ValueError, match='at least 16 of A-Z a-z 0-9'):
+        WebViewer(host='0.0.0.0', port=0, token=token)
+    assert WebViewer(host='0.0.0.0', port=0, token='Abc-_.~0123456789').token == \
+        'Abc-_.~0123456789'
