@@ -23,8 +23,9 @@ interface that maps onto a lifecycle node:
 ===============  ============================================================================
 ``open()``       configure: open and negotiate, apply the controls the user set; no streaming
 ``start()``      activate: read frames on the capture thread and hand them to ``on_frame``
-``pause()``      deactivate: stop reading; the device stays open with its controls
-``close()``      cleanup: stop reading and release the device
+``close()``      deactivate and cleanup: stop reading and release the device (once OpenCV
+                 has started a V4L2 stream, only a release stops it); start() opens it again
+``pause()``      stop reading, the device kept open (and streaming, with V4L2)
 ===============  ============================================================================
 
 A device that fails (reads fail, or no frame for `stall_periods` frame periods: a stall) is
@@ -135,9 +136,10 @@ class CaptureLoop:
         self.open()
         self._stop.clear()
         self._not_before = self._clock.now()
+        # Said before the thread runs: what it reports (a loss) is never overwritten.
+        self._update(streaming=True)
         self._thread = threading.Thread(target=self._run, name='capture', daemon=True)
         self._thread.start()
-        self._update(streaming=True)
 
     resume = start
 
@@ -205,11 +207,6 @@ class CaptureLoop:
         with self._lock:
             camera = self._camera
             return camera.controls() if camera is not None else []
-
-    def describe(self) -> str:
-        """Return what the camera gives, or that it is not open."""
-        camera = self._camera
-        return camera.describe() if camera is not None else '%s is not open' % self._name
 
     def stats(self) -> CaptureStats:
         """Return the counters so far (a snapshot)."""
