@@ -84,3 +84,23 @@ def announce_first_frame():
 def monotonic():
     """Return the time every helper records events with (system-wide, also in namespaces)."""
     return time.monotonic()
+
+
+def local_node_env():
+    """
+    Return the environment of the node processes a benchmark starts, discovery on this host.
+
+    The node processes get the installed package; this process joins them the same way, on
+    the nodes' transport. For benchmarks that have put the tests' directory (ros_harness) and
+    the installed py_vision on sys.path.
+    """
+    import ros_harness
+    from py_vision import dds
+    env = ros_harness.installed_env()
+    env.update(ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', PYTHONUNBUFFERED='1',
+               RCUTILS_COLORIZED_OUTPUT='0')
+    env.pop('ROS_LOCALHOST_ONLY', None)
+    os.environ.update(AMENT_PREFIX_PATH=env['AMENT_PREFIX_PATH'],
+                      ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    dds.use_packaged_profile()
+    return env

@@ -147,15 +147,8 @@ def main():
     parser.add_argument('--calls', type=int, default=2000, help='reports timed in process')
     options = parser.parse_args()
 
-    from bench_common import save_results
-    from py_vision import dds
-    env = ros_harness.installed_env()
-    env.update(ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', PYTHONUNBUFFERED='1',
-               RCUTILS_COLORIZED_OUTPUT='0')
-    env.pop('ROS_LOCALHOST_ONLY', None)
-    os.environ.update(AMENT_PREFIX_PATH=env['AMENT_PREFIX_PATH'],
-                      ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
-    dds.use_packaged_profile()  # the monitor uses the nodes' transport
+    from bench_common import local_node_env, save_results
+    env = local_node_env()  # the monitor joins the nodes on their transport
 
     report_s = one_report(options.calls)
     print('one camera report, built and published: %.3f ms CPU (%d calls)' % (

@@ -176,15 +176,8 @@ def main():
     options = parser.parse_args()
     loads = [float(v) for v in options.loads.split(',')]
 
-    from bench_common import save_results
-    from py_vision import dds
-    env = ros_harness.installed_env()
-    env.update(ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', PYTHONUNBUFFERED='1',
-               RCUTILS_COLORIZED_OUTPUT='0')
-    env.pop('ROS_LOCALHOST_ONLY', None)
-    os.environ.update(AMENT_PREFIX_PATH=env['AMENT_PREFIX_PATH'],
-                      ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
-    dds.use_packaged_profile()  # the collector uses the nodes' transport
+    from bench_common import local_node_env, save_results
+    env = local_node_env()  # the collector joins the nodes on their transport
 
     period_ms = 1e3 / FPS
     load_before = os.getloadavg()[0]
