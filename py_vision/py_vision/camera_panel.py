@@ -53,6 +53,9 @@ except ImportError:  # a system without diagnostic_msgs: the panel shows what it
 CALL_TIMEOUT_S = 3.0
 REFRESH_PERIOD_S = 1.0
 RELOAD_PERIOD_S = 5.0
+# A read answered short (parameters changing under it) is made again at the next refresh this
+# many times in a row, then at the reload period.
+SHORT_READS_RETRIED = 3
 DIAGNOSTICS_STALE_S = 5.0
 # The publisher's parameters that say what the camera is.
 INFO_PARAMETERS = ('video_device', 'pixel_format', 'framerate', 'image_width', 'image_height')
@@ -194,12 +197,12 @@ class _Calls:
         return self.clients[key].service_is_ready()
 
     def call(self, key: str, request, on_reply: Callable[[Any], None],
-             on_failure: Callable[[str], None]) -> None:
+             on_failure: Callable[[int, str], None]) -> None:
         """
-        Send request; on_reply(response) or on_failure(why) follows on the executor thread.
+        Send request; on_reply(response) or on_failure(status, why) follows on the executor.
 
-        on_failure is called when there is no answer within the timeout, or when the node's
-        clients are destroyed first (the node left the graph).
+        on_failure gets 504 when there is no answer within the timeout, and 503 when the
+        clients are destroyed first (the node is no longer the panel's camera).
         """
         client = self.clients[key]
         future = client.call_async(request)
@@ -216,19 +219,19 @@ class _Calls:
         """Give up the calls that have had no answer within the timeout."""
         now = time.monotonic()
         for entry in [e for e in self._pending if e[0] < now]:
-            self._give_up(entry, 'did not answer within %g s' % self._timeout)
+            self._give_up(entry, 504, 'did not answer within %g s' % self._timeout)
 
     def destroy(self, why: str) -> None:
-        """Destroy the clients; every call still waiting fails with why."""
+        """Destroy the clients; every call still waiting fails with 503 and why."""
         for entry in list(self._pending):
-            self._give_up(entry, why)
+            self._give_up(entry, 503, why)
         for client in self.clients.values():
             self._node.destroy_client(client)
 
-    def _give_up(self, entry, why):
+    def _give_up(self, entry, status, why):
         self._pending.remove(entry)
         entry[1].remove_pending_request(entry[2])
-        entry[3](why)
+        entry[3](status, why)
 
 
 class CameraPanel:
@@ -256,6 +259,7 @@ class CameraPanel:
         self._generation = 0
         self._loading = False
         self._last_load = -math.inf
+        self._short_reads = 0  # reads answered short in a row (parameters changing)
         self._without_controls = set()  # publishers known to have no camera controls
         self._via: List[str] = []
         self._jobs = collections.deque()
@@ -376,9 +380,8 @@ class CameraPanel:
                                                                        len(response.results),
                                                                        len(parameters))))
             calls.call('set', SetParameters.Request(parameters=parameters), replied,
-                       lambda why: answer.set_exception(CameraError(
-                           504 if why.startswith('did not answer') else 503,
-                           '%s %s' % (publisher, why))))
+                       lambda status, why: answer.set_exception(CameraError(
+                           status, '%s %s' % (publisher, why))))
 
     def _publishers_of(self, topic, *others):
         """Return the nodes publishing topic (a graph name), but this one and others."""
@@ -431,13 +434,13 @@ class CameraPanel:
             self._via = via
         if publisher != self._publisher:
             if self._calls is not None:
-                self._calls.destroy('left: %s publishes %s now' % (
-                    publisher, self._topic) if publisher else 'left the graph')
+                self._calls.destroy('is no longer the camera of %s' % self._topic)
             self._calls = (_Calls(self._node, publisher, self._timeout)
                            if publisher is not None else None)
             self._generation += 1
             self._loading = False
             self._last_load = -math.inf
+            self._short_reads = 0
             with self._lock:
                 self._publisher = publisher
                 self._controls, self._info, self._loaded, self._problem = {}, {}, False, ''
@@ -461,7 +464,7 @@ class CameraPanel:
         def current():
             return generation == self._generation
 
-        def failed(why):
+        def failed(status, why):
             if current():
                 self._loading = False
                 with self._lock:
@@ -471,8 +474,10 @@ class CameraPanel:
             # rclpy answers a describe or a get with nothing at all when one of the names is
             # not declared any more: the node's parameters changed under the read. That says
             # nothing about its controls: read them all again at the next refresh.
-            failed('changed its parameters while they were read; reading them again')
-            self._last_load = -math.inf
+            failed(503, 'changed its parameters while they were read; reading them again')
+            self._short_reads += 1
+            if self._short_reads < SHORT_READS_RETRIED:
+                self._last_load = -math.inf   # at the next refresh; then at the reload period
 
         def listed(response):
             if current():
@@ -505,6 +510,7 @@ class CameraPanel:
                     controls[descriptor.name] = control
                 if descriptor.name in INFO_PARAMETERS:
                     info[descriptor.name] = python_value(value)
+            self._short_reads = 0
             # Camera controls first, then the stream settings, each in the node's order.
             ordered = dict(sorted(controls.items(), key=lambda item: item[1].group != 'camera'))
             self._loading = False
