@@ -53,6 +53,8 @@ except ImportError:  # a system without diagnostic_msgs: the panel shows what it
 CALL_TIMEOUT_S = 3.0
 REFRESH_PERIOD_S = 1.0
 RELOAD_PERIOD_S = 5.0
+# What the graph calls a publisher's node before that node's name has been discovered.
+UNKNOWN_NODE_NAME = '_NODE_NAME_UNKNOWN_'
 # A read answered short (parameters changing under it) is made again at the next refresh this
 # many times in a row, then at the reload period.
 SHORT_READS_RETRIED = 3
@@ -387,7 +389,10 @@ class CameraPanel:
         """Return the nodes publishing topic (a graph name), but this one and others."""
         if topic == self._topic:
             infos = self._node.get_publishers_info_by_topic(topic)
-            names = {self._full_name(i.node_namespace, i.node_name) for i in infos}
+            # A publisher discovered before its node's name has arrived is named
+            # _NODE_NAME_UNKNOWN_ for a moment: it is found at a later refresh.
+            names = {self._full_name(i.node_namespace, i.node_name) for i in infos
+                     if i.node_name != UNKNOWN_NODE_NAME}
         else:
             # get_publishers_info_by_topic() applies this node's remappings to the name it is
             # given (the subscriber's usb_camera/image:=cv_bridge_image would turn the name

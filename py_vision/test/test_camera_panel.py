@@ -505,3 +505,49 @@ def test_a_call_on_its_way_when_the_node_leaves_fails_at_once_with_the_reason():
     assert len(node.destroyed) == len(_Calls.SERVICES)
     calls.expire()
     assert len(failures) == 1, 'a failed call is not failed again'
+
+
+def test_a_publisher_whose_node_name_is_not_discovered_yet_is_not_taken_for_the_camera():
+    # The graph can list a publisher before the name of its node has arrived: it is then
+    # '_NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_' for a moment, not a camera to ask.
+    from types import SimpleNamespace
+    from py_vision.camera_panel import CameraPanel
+
+    class Node:
+        infos = []
+
+        def get_namespace(self):
+            return '/'
+
+        def get_name(self):
+            return 'usbcam_subscriber'
+
+        def create_guard_condition(self, callback):
+            return SimpleNamespace(trigger=callback)
+
+        def create_subscription(self, *args, **kwargs):
+            return None
+
+        def create_timer(self, period, callback):
+            return None
+
+        def get_publishers_info_by_topic(self, topic):
+            return self.infos
+
+        def create_client(self, kind, name):
+            return SimpleNamespace(service_is_ready=lambda: False, name=name)
+
+        def destroy_client(self, client):
+            pass
+
+    node = Node()
+    panel = CameraPanel(node, '/usb_camera/image')
+    node.infos = [SimpleNamespace(node_namespace='_NODE_NAMESPACE_UNKNOWN_',
+                                  node_name='_NODE_NAME_UNKNOWN_')]
+    panel._refresh()
+    assert panel.describe()['publisher'] is None
+    node.infos.append(SimpleNamespace(node_namespace='/', node_name='usbcam_publisher'))
+    panel._refresh()
+    state = panel.describe()
+    assert state['publisher'] == '/usbcam_publisher' and state['publishers'] == [
+        '/usbcam_publisher']
