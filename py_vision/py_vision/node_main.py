@@ -39,6 +39,7 @@ import signal
 import sys
 import tempfile
 import threading
+from typing import Callable, Optional
 
 from py_vision import dds
 from py_vision.params import ConfigError, help_text
@@ -188,7 +189,7 @@ def _shutdown_quietly():
         pass
 
 
-def run(node_class, args=None):
+def run(node_class, args=None, variant: Optional[Callable[[], type]] = None):
     """
     Build node_class() and spin it until Ctrl-C, SIGTERM or rclpy shutdown; return the status.
 
@@ -196,8 +197,8 @@ def run(node_class, args=None):
     PUBLISHES (what it publishes, see dds.segment_size); it
     raises ConfigError for problems the user has to fix, has a close() that releases what it
     holds (threads, devices, sockets) and copes with a half-built node, and sets `failed` when
-    it stops because of an error. It may have a classmethod variant(), called once rclpy is
-    up, that returns the class to build instead (usbcam_publisher: its lifecycle node).
+    it stops because of an error. variant(), when given, is called once rclpy is up and
+    returns the class to build instead (see main_for).
     """
     argv = list(sys.argv if args is None else args)
     if _wants_help(argv):
@@ -232,9 +233,9 @@ def run(node_class, args=None):
         # The object exists before its __init__ (which opens devices and ports) so that a
         # start-up that fails half-way (ConfigError) can still be cleaned up.
         if _Stopping.signum is None:  # else: stopped before there was anything to build
-            # A node class may build a variant of itself chosen by its parameters
-            # (variant(): usbcam_publisher's managed:=true).
-            node_class = getattr(node_class, 'variant', lambda: node_class)()
+            # A variant chosen by the parameters (usbcam_publisher's managed:=true).
+            if variant is not None:
+                node_class = variant()
             node = node_class.__new__(node_class)
             node.__init__()
             built = True
@@ -299,9 +300,15 @@ def _has_logger(node):
     return True
 
 
-def main_for(node_class):
-    """Return a console_scripts entry point for node_class."""
+def main_for(node_class, variant: Optional[Callable[[], type]] = None):
+    """
+    Return a console_scripts entry point for node_class.
+
+    variant: called once rclpy is up (parameters can be read), returns the class to build
+    instead of node_class (usbcam_publisher: its lifecycle node when managed:=true); the
+    command line, --help and the node's COMMANDS stay node_class's.
+    """
     def main(args=None):
-        sys.exit(run(node_class, args))
+        sys.exit(run(node_class, args, variant))
     main.__doc__ = 'Run the %s node.' % node_class.NODE_NAME
     return main

@@ -37,8 +37,8 @@ from py_vision.capture.listing import device_listing
 from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
 from py_vision.diagnostics import Diagnostics
-from py_vision.node_main import ConfigError, main_for
-from py_vision.params import Parameters, read_given, Spec
+from py_vision.node_main import ConfigError
+from py_vision.params import Parameters, Spec
 from py_vision.qos import publisher_qos, RELIABILITY
 from py_vision.transport import ImagePublisher, sibling_topic
 import rclpy
@@ -97,14 +97,6 @@ class USBImagePublisher(Node):
     capture = controls = images = None
     _log_name = NODE_NAME
     raw_published = compressed_published = frames_decoded = 0
-
-    @classmethod
-    def variant(cls):
-        """Return the class to build: the lifecycle node when the parameter managed is true."""
-        if read_given(cls.NODE_NAME, MANAGED):
-            from py_vision.managed_publisher import ManagedPublisher
-            return ManagedPublisher
-        return cls
 
     def __init__(self):
         super().__init__(self.NODE_NAME)
@@ -328,8 +320,3 @@ def list_formats(argv):
 
 
 USBImagePublisher.COMMANDS = {'--list-formats': list_formats}
-main = main_for(USBImagePublisher)
-
-
-if __name__ == '__main__':
-    main()
