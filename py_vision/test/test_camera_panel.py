@@ -505,47 +505,123 @@ def test_a_call_on_its_way_when_the_node_leaves_fails_at_once_with_the_reason():
     assert len(failures) == 1, 'a failed call is not failed again'
 
 
+class GraphNode:
+    """
+    Just enough of an rclpy node for a CameraPanel, without ROS: a graph and service clients.
+
+    `infos` is what get_publishers_info_by_topic() answers. Every request sent is recorded in
+    `sent` as (service, request, future); a service in `answers` (service -> function of the
+    request) is answered at once, the others wait for the test.
+    """
+
+    def __init__(self):
+        self.infos, self.sent, self.answers = [], [], {}
+
+    def get_namespace(self):
+        return '/'
+
+    def get_name(self):
+        return 'usbcam_subscriber'
+
+    def create_guard_condition(self, callback):
+        from types import SimpleNamespace
+        return SimpleNamespace(trigger=callback)   # jobs run at once, on the caller's thread
+
+    def create_subscription(self, *args, **kwargs):
+        return None
+
+    def create_timer(self, period, callback):
+        return None
+
+    def get_publishers_info_by_topic(self, topic):
+        return self.infos
+
+    def create_client(self, kind, name):
+        from concurrent.futures import Future
+        from types import SimpleNamespace
+        service = name.rsplit('/', 1)[1]
+
+        def call_async(request):
+            future = Future()
+            self.sent.append((service, request, future))
+            if service in self.answers:
+                future.set_result(self.answers[service](request))
+            return future
+        return SimpleNamespace(service_is_ready=lambda: True, call_async=call_async,
+                               remove_pending_request=lambda future: None)
+
+    def destroy_client(self, client):
+        pass
+
+
+def node_info(name, namespace='/'):
+    from types import SimpleNamespace
+    return SimpleNamespace(node_namespace=namespace, node_name=name)
+
+
 def test_a_publisher_whose_node_name_is_not_discovered_yet_is_not_taken_for_the_camera():
     # The graph can list a publisher before the name of its node has arrived: it is then
     # '_NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_' for a moment, not a camera to ask.
-    from types import SimpleNamespace
     from py_vision.camera_panel import CameraPanel
-
-    class Node:
-        infos = []
-
-        def get_namespace(self):
-            return '/'
-
-        def get_name(self):
-            return 'usbcam_subscriber'
-
-        def create_guard_condition(self, callback):
-            return SimpleNamespace(trigger=callback)
-
-        def create_subscription(self, *args, **kwargs):
-            return None
-
-        def create_timer(self, period, callback):
-            return None
-
-        def get_publishers_info_by_topic(self, topic):
-            return self.infos
-
-        def create_client(self, kind, name):
-            return SimpleNamespace(service_is_ready=lambda: False, name=name)
-
-        def destroy_client(self, client):
-            pass
-
-    node = Node()
+    node = GraphNode()
     panel = CameraPanel(node, '/usb_camera/image')
-    node.infos = [SimpleNamespace(node_namespace='_NODE_NAMESPACE_UNKNOWN_',
-                                  node_name='_NODE_NAME_UNKNOWN_')]
+    node.infos = [node_info('_NODE_NAME_UNKNOWN_', '_NODE_NAMESPACE_UNKNOWN_')]
     panel._refresh()
     assert panel.describe()['publisher'] is None
-    node.infos.append(SimpleNamespace(node_namespace='/', node_name='usbcam_publisher'))
+    node.infos.append(node_info('usbcam_publisher'))
     panel._refresh()
     state = panel.describe()
     assert state['publisher'] == '/usbcam_publisher' and state['publishers'] == [
         '/usbcam_publisher']
+
+
+def test_a_node_answering_short_again_and_again_is_read_at_the_reload_period():
+    # Three reads answered short are made again at the next refreshes; after that the node is
+    # read at the reload period only, not every second for ever.
+    from types import SimpleNamespace
+    from py_vision.camera_panel import CameraPanel, RELOAD_PERIOD_S, SHORT_READS_RETRIED
+    node = GraphNode()
+    node.infos = [node_info('usbcam_publisher')]
+    node.answers = {
+        'list_parameters': lambda request: SimpleNamespace(
+            result=SimpleNamespace(names=['brightness'])),
+        'describe_parameters': lambda request: SimpleNamespace(descriptors=[])}
+    now = [0.0]
+    panel = CameraPanel(node, '/usb_camera/image', clock=lambda: now[0])
+    reads = []
+    for second in range(12):
+        now[0] = float(second)
+        before = len(node.sent)
+        panel._refresh()
+        if any(service == 'list_parameters' for service, _, _ in node.sent[before:]):
+            reads.append(second)
+    quick = list(range(SHORT_READS_RETRIED))   # 0, 1, 2
+    assert reads == quick + [quick[-1] + RELOAD_PERIOD_S]
+    assert 'changed its parameters while they were read' in panel.describe()['message']
+
+
+def test_a_set_answered_with_the_wrong_number_of_results_is_a_502():
+    from rcl_interfaces.msg import IntegerRange, ParameterDescriptor, ParameterValue
+    from types import SimpleNamespace
+    from py_vision.camera_panel import CameraPanel
+    from py_vision.web_viewer import CameraError
+    import pytest
+    node = GraphNode()
+    node.infos = [node_info('usbcam_publisher')]
+    brightness = ParameterDescriptor(
+        name='brightness', type=2, additional_constraints=CONTROL_MARK,
+        integer_range=[IntegerRange(from_value=-64, to_value=64, step=1)])
+    node.answers = {
+        'list_parameters': lambda request: SimpleNamespace(
+            result=SimpleNamespace(names=['brightness'])),
+        'describe_parameters': lambda request: SimpleNamespace(descriptors=[brightness]),
+        'get_parameters': lambda request: SimpleNamespace(
+            values=[ParameterValue(type=2, integer_value=0)]),
+        'set_parameters': lambda request: SimpleNamespace(results=[])}
+    panel = CameraPanel(node, '/usb_camera/image')
+    panel._refresh()
+    assert 'brightness' in panel.describe()['controls']
+    with pytest.raises(CameraError) as refused:
+        panel.set_controls({'brightness': 5})
+    assert refused.value.status == 502
+    assert 'answered 0 result(s) for 1 parameter(s)' in str(refused.value)
