@@ -111,6 +111,6 @@ fi
 print("[test] Python", sys.version.split()[0], "numpy", numpy.__version__, "OpenCV", cv2.__version__)'
 status=0
 PY_VISION_INSTALL=.venv-board/install PY_VISION_BROWSER=off .venv-board/bin/python -m pytest \
-  py_vision/test --ignore=py_vision/test/test_web_browser.py -p no:cacheprovider "$@" \
+  py_vision/test --ignore=py_vision/test/browser -p no:cacheprovider "$@" \
   || status=$?
 check_ran_tests "$status" 'board-version run' "$@"

@@ -35,7 +35,7 @@ import ros_harness
 from ros_harness import wait_until
 
 NETNS_READY = os.geteuid() == 0 and shutil.which('ip') and shutil.which('unshare')
-CHECKER = str(Path(__file__).with_name('frame_checker.py'))
+CHECKER = str(Path(__file__).parents[1] / 'frame_checker.py')
 SAME_HOST_FRAMES = 30
 # How long the PC keeps listening after the board's subscriber has its frames: the control
 # cases (no localhost setting) deliver their first frame across the veth well within it.

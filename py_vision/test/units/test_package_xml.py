@@ -19,7 +19,7 @@ from pathlib import Path
 import sys
 import xml.etree.ElementTree as ET
 
-PACKAGE = Path(__file__).resolve().parents[1]
+PACKAGE = Path(__file__).resolve().parents[2]
 # rosdep keys of the Python modules whose key is not the module's own name.
 ROSDEP_KEY = {'cv2': 'python3-opencv', 'numpy': 'python3-numpy', 'yaml': 'python3-yaml'}
 # Modules whose key is their name: ROS packages.

@@ -304,8 +304,8 @@ def test_two_hosts_over_a_veth_pair(ros_env, domain_id, tmp_path):
                                     start_new_session=True)
         checker_log = open(tmp_path / 'checker.log', 'w+')
         publisher_log = open(tmp_path / 'publisher.log', 'w+')
-        procs.append(in_host(pc, [sys.executable, str(Path(__file__).with_name(
-            'frame_checker.py')), '30'], checker_log))
+        checker = str(Path(__file__).parents[1] / 'frame_checker.py')
+        procs.append(in_host(pc, [sys.executable, checker, '30'], checker_log))
         procs.append(in_host(board, [str(ros_harness.EXECUTABLES / 'usbcam_publisher'),
                                      '--ros-args', '-p', 'video_device:=synthetic',
                                      '-p', 'framerate:=15.0'], publisher_log))

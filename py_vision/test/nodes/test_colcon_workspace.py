@@ -29,7 +29,7 @@ import xml.etree.ElementTree as ET
 
 import ros_harness
 
-PACKAGE_DIR = Path(__file__).resolve().parents[1]
+PACKAGE_DIR = Path(__file__).resolve().parents[2]
 # The copyright linter's tests, and a test that starts a node and reads its parameters through
 # a peer: these must be among the tests that ran.
 SELECTED = {'test_copyright', 'test_a_node_runs_with_exactly_the_values_of_its_params_file'}
