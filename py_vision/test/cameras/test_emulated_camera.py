@@ -371,8 +371,8 @@ def test_every_control_type_answers_as_the_kernels_controls_framework(emulated_c
     assert set(seen['both']) == set(seen['simple']) | set(seen['compound'])
     both = seen['both']
     assert both['Integer 64 Bits']['type'] == v4l2.CTRL_TYPE_INTEGER64
-    assert (both['Integer 64 Bits']['min'], both['Integer 64 Bits']['max']) == (-2 ** 63,
-                                                                              2 ** 63 - 1)
+    wide = both['Integer 64 Bits']
+    assert (wide['min'], wide['max']) == (-2 ** 63, 2 ** 63 - 1)
     assert (both['U32 1 Element Array']['dims'], both['U32 1 Element Array']['elems']) == (1, 1)
     assert both['Area']['type'] == v4l2.CTRL_TYPE_AREA
     for name in ('String', 'Area', 'U32 1 Element Array'):
