@@ -146,7 +146,8 @@ class USBImagePublisher(Node):
         self._synthetic = SyntheticDevices()
         self.failed = False
         self.capture = CaptureLoop(self._open_camera, self.publish_image, self.get_logger(),
-                                   name=self.video_device, on_failure=self._capture_failed)
+                                   name=self.video_device, on_failure=self._capture_failed,
+                                   on_refused=self._controls_refused)
         self._monitor = CameraMonitor()
         self.diagnostics = Diagnostics(self, hardware_id=self.video_device)
         self.diagnostics.add('camera', self.camera_status)
@@ -170,11 +171,16 @@ class USBImagePublisher(Node):
         """Declare the open camera's controls as parameters (once; the loop keeps the values)."""
         if self.controls is not None:  # configured again after a cleanup
             return
-        controls = ControlParameters(self._params, self.capture.set_control,
-                                     self.capture.controls, self.get_logger(), self.video_device)
+        controls = ControlParameters(self._params, self.capture, self.get_logger(),
+                                     self.video_device)
         controls.declare(set(self.values))  # ConfigError: a mistyped value, declared nothing
         self.controls = controls
         self.create_timer(CONTROL_SYNC_PERIOD_S, self.controls.sync)
+
+    def _controls_refused(self, refusals):
+        """Say which controls a reopened camera did not take again (the capture loop's)."""
+        if self.controls is not None:
+            self.controls.warn(refusals)
 
     def _load_calibration(self):
         """Load the calibration; serve set_camera_info."""
