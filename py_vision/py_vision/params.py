@@ -163,6 +163,11 @@ def help_text(executable: str, specs: Sequence[Spec], summary: str) -> str:
              '| --params-file FILE | -r FROM:=TO ...]' % executable, '', summary, '',
              'parameters:']
     lines += [spec.help_line() for spec in specs]
+    lines += ['  qos_overrides.<topic>.publisher.<policy> (read-only)',
+              "      rclpy's QoS overrides of each topic the node publishes (e.g. "
+              'qos_overrides./usb_camera/image.publisher.reliability:=best_effort): history '
+              '(keep_last, keep_all), depth (1..1000), reliability (reliable, best_effort), '
+              'durability (volatile, transient_local)']
     return '\n'.join(lines) + '\n'
 
 
@@ -213,6 +218,11 @@ class Parameters:
         self._first: set = set()
         self._checks: list = []
         node.add_on_set_parameters_callback(self._on_set)
+
+    @property
+    def node(self):
+        """Return the node whose parameters these are."""
+        return self._node
 
     def add_check(self, check: Callable[[Dict[str, Any]], Optional[str]]) -> None:
         """

@@ -76,7 +76,7 @@ class VideoSubscriber(Node):
         self.display.attach(self, self.stats, self.subscription_.topic_name,
                             camera_topic=self.subscription_.topic_name)
         self._recent = Recent()
-        self.diagnostics = Diagnostics(self, hardware_id=self.subscription_.topic_name)
+        self.diagnostics = Diagnostics(params, hardware_id=self.subscription_.topic_name)
         self.diagnostics.add('stream', self.stream_status)
 
     def _set_stats_period(self, period):
