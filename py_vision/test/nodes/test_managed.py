@@ -26,7 +26,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
 from param_client import get_parameters
-from py_vision.managed_publisher import ManagedPublisher
+from py_vision.usbcam_publisher import USBImagePublisher
 import pytest
 from rclpy.lifecycle import TransitionCallbackReturn
 from rclpy.parameter import Parameter
@@ -289,7 +289,7 @@ def test_the_plain_node_is_not_a_lifecycle_node(launch, peer):
     assert not [name for name in services if 'change_state' in name or 'get_state' in name]
 
 
-class StuckCapture(ManagedPublisher):
+class StuckCapture(USBImagePublisher):
     """The managed node, with a capture thread that does not end when asked (on demand)."""
 
     stuck = False
@@ -302,7 +302,7 @@ class StuckCapture(ManagedPublisher):
 
 def test_cleanup_fails_and_keeps_the_topics_when_the_capture_thread_does_not_end(peer):
     node = StuckCapture(context=peer.context, parameter_overrides=[
-        Parameter(name, value=value) for name, value in CAMERA.items() if name != 'managed'])
+        Parameter(name, value=value) for name, value in CAMERA.items()])
     try:
         assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
         topics = node.images
