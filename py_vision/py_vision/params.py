@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import math
 from typing import Any, Callable, Dict, Optional, Sequence, Tuple
 
-from py_vision.web_viewer import good_token, TOKEN_RULE
+from py_vision.web_token import good_token, TOKEN_RULE
 from rcl_interfaces.msg import (
     FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
 import rclpy
