@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import math
 from typing import Any, Callable, Dict, Optional, Sequence, Tuple
 
-from py_vision.web_viewer import good_token, TOKEN_RULE
+from py_vision.web_token import good_token, TOKEN_RULE
 from rcl_interfaces.msg import (
     FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
 import rclpy
@@ -165,6 +165,11 @@ def help_text(executable: str, specs: Sequence[Spec], summary: str) -> str:
              '| --params-file FILE | -r FROM:=TO ...]' % executable, '', summary, '',
              'parameters:']
     lines += [spec.help_line() for spec in specs]
+    lines += ['  qos_overrides.<topic>.publisher.<policy> (read-only)',
+              "      rclpy's QoS overrides of each topic the node publishes (e.g. "
+              'qos_overrides./usb_camera/image.publisher.reliability:=best_effort): history '
+              '(keep_last, keep_all), depth (1..1000), reliability (reliable, best_effort), '
+              'durability (volatile, transient_local)']
     return '\n'.join(lines) + '\n'
 
 
@@ -214,6 +219,11 @@ class Parameters:
         self._specs: Dict[str, Tuple[Spec, Optional[Applier]]] = {}
         self._declaring = False
         node.add_on_set_parameters_callback(self._on_set)
+
+    @property
+    def node(self):
+        """Return the node whose parameters these are."""
+        return self._node
 
     def declare(self, spec: Spec, on_change: Optional[Callable[[Any], Optional[str]]] = None
                 ) -> Any:
