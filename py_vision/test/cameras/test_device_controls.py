@@ -138,6 +138,12 @@ def test_the_synthetic_cameras_controls_are_parameters_too(launch, peer):
         '3=Aperture Priority Mode'
 
 
+def wait_declared(peer, name):
+    # The controls are declared once the camera is open, after 'opened' is logged.
+    wait_until(lambda: name in list_parameters(peer, NODE), 20,
+               what='%s to be declared' % name)
+
+
 def test_every_control_type_is_handled_from_the_command_line_to_the_device(
         launch, peer, emulated_camera, ros_env):
     camera = emulated_camera('every_control')
@@ -147,11 +153,14 @@ def test_every_control_type_is_handled_from_the_command_line_to_the_device(
         'integer_64_bits': wide, 'gain': 7, 'gain_automatic': False, 'bitmask': 0x80400010,
         'integer_menu': 8, 'menu': 4, 'button': True}, env=camera.env(ros_env))
     node.wait_for_output('opened', 30)
-    # Given on the command line: on the device, the automatic mode before the gain it holds.
-    assert [camera.control(name) for name in (
-        'integer_64_bits', 'gain_automatic', 'gain', 'bitmask', 'integer_menu', 'menu')] == [
-        wide, 0, 7, 0x80400010, 8, 4]
-    assert camera.control('button') == 1, 'pressed once at start'
+    # Given on the command line: on the device, the automatic mode before the gain it holds
+    # (they are set once the camera is open, after 'opened' is logged).
+    given = ('integer_64_bits', 'gain_automatic', 'gain', 'bitmask', 'integer_menu', 'menu',
+             'button')
+    wait_until(lambda: [camera.control(name) for name in given] == [
+        wide, 0, 7, 0x80400010, 8, 4, 1], 20, what='the values given to reach the device, '
+               'the button pressed once')
+    wait_declared(peer, 'integer_64_bits')
     assert len(re.findall('not parameters', node.output())) == 1
     assert 'not parameters (no single value to set): string (string), u32_1_element_array ' \
         '(array), area (compound)' in node.output()
@@ -191,6 +200,7 @@ def test_a_refused_inactive_control_names_the_automatic_mode_holding_it(
     node = launch(NODE, params={'video_device': camera.device, 'image_width': 320,
                                 'image_height': 240}, env=camera.env(ros_env))
     node.wait_for_output('opened', 30)
+    wait_declared(peer, 'blue_balance')
     for name, holder in (('gain', 'gain_automatic'), ('hue', 'hue_automatic'),
                          ('red_balance', 'white_balance_automatic'),
                          ('blue_balance', 'white_balance_automatic')):
