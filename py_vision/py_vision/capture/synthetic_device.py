@@ -53,7 +53,7 @@ from urllib.parse import parse_qsl
 import cv2
 import numpy as np
 from py_vision.capture.controls import (
-    BOOL, CID, ControlInfo, EXPOSURE_APERTURE_PRIORITY, EXPOSURE_MANUAL, INT, MENU, OWNED_BY)
+    BOOL, CID, ControlInfo, EXPOSURE_APERTURE_PRIORITY, EXPOSURE_MANUAL, holder, INT, MENU)
 from py_vision.capture.pacing import FramePacer
 from py_vision.capture.source import Clock, FrameFormat, FrameSize, MONOTONIC
 from py_vision.capture.synthetic_picture import (
@@ -100,7 +100,6 @@ _PROPS = {
     cv2.CAP_PROP_FOCUS: CID.FOCUS_ABSOLUTE, cv2.CAP_PROP_AUTOFOCUS: CID.FOCUS_AUTO,
 }
 _DEFAULTS = {control.cid: control.default for control in CONTROLS}
-_NEUTRAL = {control.name: control.default for control in CONTROLS}
 
 
 def yuyv_max_fps(width, height):
@@ -305,8 +304,7 @@ class SyntheticCamera:
             return False, None
         if self._rendered != self._grabbed:
             self._render(self._grabbed)
-        yuyv = apply_controls(self._buf, {_CONTROL_OF[cid].name: value for cid, value
-                                          in self._controls.items()}, _NEUTRAL)
+        yuyv = apply_controls(self._buf, self._controls, _DEFAULTS)
         if self._fourcc == FOURCC_YUYV:
             if self._convert_rgb:
                 return True, yuyv_to_bgr(yuyv)
@@ -358,15 +356,10 @@ class SyntheticCamera:
         return found
 
     def controls(self) -> List[ControlInfo]:
-        """Return the camera's controls with their values; owned ones inactive in auto mode."""
-        found = []
-        for control in CONTROLS:
-            inactive = False
-            if control.cid in OWNED_BY:
-                owner, freeing = OWNED_BY[control.cid]
-                inactive = self._controls[owner] not in freeing
-            found.append(control.with_value(self._controls[control.cid], inactive))
-        return found
+        """Return the camera's controls with their values; held ones inactive in auto mode."""
+        return [control.with_value(self._controls[control.cid],
+                                   holder(control.cid, self._controls) is not None)
+                for control in CONTROLS]
 
     def set_control(self, cid: int, value: int) -> Optional[str]:
         """Set a control as a driver does; return why it was refused, or None."""
