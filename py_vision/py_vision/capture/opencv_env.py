@@ -35,6 +35,8 @@ __all__ = ['prepare_opencv']
 def prepare_opencv(fps: float = 30.0) -> None:
     """Silence OpenCV's log and bound its V4L2 read wait for a camera at fps (idempotent)."""
     os.environ.setdefault('OPENCV_LOG_LEVEL', 'SILENT')
+    # FFmpeg's own messages (a stream it decodes ending mid-picture) too: AV_LOG_QUIET.
+    os.environ.setdefault('OPENCV_FFMPEG_LOGLEVEL', '-8')
     # Whole seconds: at least 1, and at least three frame periods of a slow camera.
     seconds = max(1, math.ceil(3.0 / fps)) if fps > 0 else 10
     os.environ.setdefault('OPENCV_VIDEOIO_V4L_SELECT_TIMEOUT', str(seconds))
