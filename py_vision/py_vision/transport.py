@@ -218,7 +218,7 @@ class VideoPublisher:
         self.publisher = create_publisher(parameters, self.topic.msg_type, self.name, qos)
         if self.topic.fallback:
             node.get_logger().warning(
-                'foxglove_msgs 3.0 or newer (CompressedVideo) is not installed: the camera\'s '
+                "foxglove_msgs 3.0 or newer (CompressedVideo) is not installed: the camera's "
                 '%s goes out as sensor_msgs/CompressedImage (format %s) on %s; Foxglove and '
                 "image_transport's foxglove plugin read foxglove_msgs/CompressedVideo on "
                 '%s/foxglove (install ros-$ROS_DISTRO-foxglove-msgs)' % (

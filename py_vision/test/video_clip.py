@@ -36,3 +36,43 @@ def access_units(path: Path = CLIP) -> List[bytes]:
         starts.append(position)
         position = data.find(_DELIMITER, position + 1)
     return [data[start:end] for start, end in zip(starts, starts[1:] + [len(data)])]
+
+
+class ClipPublisher:
+    """
+    Publishes the clip's access units on a peer node, in a loop, as a camera would.
+
+    As sensor_msgs/CompressedImage with format h264 (what py_vision publishes where
+    foxglove_msgs is not installed), stamped now, at `rate`; `sent` lists the index of each unit
+    published, in order. Independent of py_vision's own publisher.
+    """
+
+    def __init__(self, peer, topic='usb_camera/image/h264', rate=30.0, first=0):
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        self._node = peer.node
+        self._units = access_units()
+        self._next = first
+        self.sent = []
+        self.publisher = self._node.create_publisher(
+            self._message_type(), topic,
+            QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+        self._timer = self._node.create_timer(1.0 / rate, self._publish)
+
+    @staticmethod
+    def _message_type():
+        from sensor_msgs.msg import CompressedImage
+        return CompressedImage
+
+    def _publish(self):
+        msg = self._message_type()(format='h264')
+        msg.header.stamp = self._node.get_clock().now().to_msg()
+        msg.header.frame_id = 'clip'
+        index = self._next % len(self._units)
+        msg.data = self._units[index]
+        self.publisher.publish(msg)
+        self.sent.append(index)
+        self._next += 1
+
+    def stop(self):
+        """Stop publishing."""
+        self._node.destroy_timer(self._timer)
