@@ -32,8 +32,10 @@ import cv2
 from py_vision import dds
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
 from py_vision.camera_diagnostics import CameraMonitor
-from py_vision.capture import Camera, CaptureLoop, PIXEL_FORMATS, SourceError, SyntheticDevices
+from py_vision.capture import (
+    Camera, CaptureLoop, pixel_format_accepted, SourceError, SyntheticDevices)
 from py_vision.capture.listing import device_listing
+from py_vision.capture.pixel_formats import names_accepted
 from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
 from py_vision.diagnostics import Diagnostics
@@ -76,8 +78,9 @@ class USBImagePublisher(Node):
         Spec('image_height', 480, 'requested frame height in pixels', (1, 8192)),
         Spec('framerate', 10.0, 'requested frames per second', (0.0, 1000.0),
              check=lambda v: v > 0, accepted='a number > 0 and <= 1000'),
-        Spec('pixel_format', 'auto', 'what the camera sends over USB; auto reaches the '
-             'requested rate where the camera can', choices=PIXEL_FORMATS),
+        Spec('pixel_format', 'auto', 'what the camera sends, by the FourCC --list-formats '
+             'prints; auto: what reaches the requested size and rate with the least work',
+             check=pixel_format_accepted, accepted='auto, or a FourCC: %s' % names_accepted()),
         Spec('jpeg_quality', 80, 'JPEG quality of usb_camera/image/compressed when encoded '
              "here (an MJPEG camera's own JPEG is published as it is)", (1, 100), live=True),
         Spec('frame_id', 'usb_camera', 'header.frame_id of the images', check=bool,
@@ -105,7 +108,10 @@ class USBImagePublisher(Node):
         self._configure_camera()
         self._declare_controls()
         self._load_calibration()
-        self.capture.start()
+        try:
+            self.capture.start()
+        except SourceError as error:
+            raise ConfigError(str(error))
 
     def _declare_parameters(self, errors=None):
         """
