@@ -20,7 +20,7 @@ from setuptools.command.install_scripts import install_scripts
 
 package_name = 'py_vision'
 executables = {
-    'usbcam_publisher': 'py_vision.publisher_main',
+    'usbcam_publisher': 'py_vision.usbcam_publisher',
     'usbcam_subscriber': 'py_vision.usbcam_subscriber',
     'cv_bridge_test': 'py_vision.cv_bridge_test',
 }

@@ -101,7 +101,10 @@ class ProcessingStats:
 
 
 class CvBridgeTest(Node):
+    """The processing node (node_main.NodeProgram): a red circle on the newest frame."""
+
     NODE_NAME = 'cv_bridge_test'
+    COMMANDS = {}
     PUBLISHES = dds.INPUT_SIZE
     SUMMARY = ('Draws a red circle on every frame of usb_camera/image and publishes it on '
                'cv_bridge_image, always working on the newest frame.')
@@ -114,6 +117,7 @@ class CvBridgeTest(Node):
     )
 
     worker = display = None  # what close() finds when start-up was interrupted
+    failed = False           # it never stops of an error of its own
     _too_large_said = False  # the warning about frames larger than the segment
 
     def __init__(self):

@@ -39,16 +39,47 @@ import signal
 import sys
 import tempfile
 import threading
-from typing import Callable, Optional
+from typing import Callable, ClassVar, Dict, List, Protocol, Sequence, Type
 
 from py_vision import dds
-from py_vision.params import ConfigError, help_text
+from py_vision.params import ConfigError, help_text, Spec
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.logging import get_logger
 from rclpy.signals import SignalHandlerOptions
 
-__all__ = ['ConfigError', 'main_for', 'run']
+__all__ = ['ConfigError', 'main_for', 'NodeProgram', 'run']
+
+
+class NodeProgram(Protocol):
+    """
+    What run() needs of a node class (an rclpy Node) and of the node it builds.
+
+    The class says what --help prints (NODE_NAME, PARAMETERS, SUMMARY), what it publishes
+    before rclpy starts (PUBLISHES: dds.NO_IMAGES, OWN_SIZE or INPUT_SIZE, which sizes its
+    shared memory) and its own commands (COMMANDS: a flag such as '--list-formats' -> a function
+    of the command line returning the exit status, run instead of the node). Built with no
+    arguments, the node raises ConfigError for anything the user has to fix; close() releases
+    what it holds (threads, devices, sockets) and copes with a half-built node; `failed` is set
+    when it stops because of an error (the exit status is then 1).
+    """
+
+    NODE_NAME: ClassVar[str]
+    PARAMETERS: ClassVar[Sequence[Spec]]
+    SUMMARY: ClassVar[str]
+    PUBLISHES: ClassVar[str]
+    COMMANDS: ClassVar[Dict[str, Callable[[List[str]], int]]]
+    failed: bool
+
+    def __init__(self) -> None: ...  # noqa: D107
+
+    def close(self) -> None: ...  # noqa: D102
+
+    def get_logger(self): ...  # noqa: D102 (rclpy Node's)
+
+    def create_guard_condition(self, callback): ...  # noqa: D102 (rclpy Node's)
+
+    def destroy_node(self) -> None: ...  # noqa: D102 (rclpy Node's)
 
 
 class _Stopping:
@@ -189,16 +220,11 @@ def _shutdown_quietly():
         pass
 
 
-def run(node_class, args=None, variant: Optional[Callable[[], type]] = None):
+def run(node_class: Type[NodeProgram], args=None) -> int:
     """
     Build node_class() and spin it until Ctrl-C, SIGTERM or rclpy shutdown; return the status.
 
-    node_class has NODE_NAME, PARAMETERS (a tuple of params.Spec) and SUMMARY for --help, and
-    PUBLISHES (what it publishes, see dds.segment_size); it
-    raises ConfigError for problems the user has to fix, has a close() that releases what it
-    holds (threads, devices, sockets) and copes with a half-built node, and sets `failed` when
-    it stops because of an error. variant(), when given, is called once rclpy is up and
-    returns the class to build instead (see main_for).
+    node_class is what NodeProgram describes.
     """
     argv = list(sys.argv if args is None else args)
     if _wants_help(argv):
@@ -207,7 +233,7 @@ def run(node_class, args=None, variant: Optional[Callable[[], type]] = None):
         return 0
     # A node's own commands (COMMANDS: flag -> function(argv) -> exit status) run instead of
     # the node, without a ROS graph: usbcam_publisher --list-formats.
-    for flag, command in getattr(node_class, 'COMMANDS', {}).items():
+    for flag, command in node_class.COMMANDS.items():
         if flag in argv[1:]:
             return _run_command(command, argv)
     # From here a signal is a request, carried out at the next of the checks below: rclpy
@@ -233,9 +259,6 @@ def run(node_class, args=None, variant: Optional[Callable[[], type]] = None):
         # The object exists before its __init__ (which opens devices and ports) so that a
         # start-up that fails half-way (ConfigError) can still be cleaned up.
         if _Stopping.signum is None:  # else: stopped before there was anything to build
-            # A variant chosen by the parameters (usbcam_publisher's managed:=true).
-            if variant is not None:
-                node_class = variant()
             node = node_class.__new__(node_class)
             node.__init__()
             built = True
@@ -270,7 +293,7 @@ def run(node_class, args=None, variant: Optional[Callable[[], type]] = None):
         if built and _Stopping.signum is not None:
             node.get_logger().info('stopped by %s' % signal.Signals(_Stopping.signum).name)
         _shutdown_quietly()
-    if getattr(node, 'failed', False):
+    if node is not None and built and node.failed:
         status = 1
     return status
 
@@ -300,15 +323,9 @@ def _has_logger(node):
     return True
 
 
-def main_for(node_class, variant: Optional[Callable[[], type]] = None):
-    """
-    Return a console_scripts entry point for node_class.
-
-    variant: called once rclpy is up (parameters can be read), returns the class to build
-    instead of node_class (usbcam_publisher: its lifecycle node when managed:=true); the
-    command line, --help and the node's COMMANDS stay node_class's.
-    """
+def main_for(node_class: Type[NodeProgram]) -> Callable[..., None]:
+    """Return the console_scripts entry point of node_class."""
     def main(args=None):
-        sys.exit(run(node_class, args, variant))
+        sys.exit(run(node_class, args))
     main.__doc__ = 'Run the %s node.' % node_class.NODE_NAME
     return main

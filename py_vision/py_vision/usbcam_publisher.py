@@ -23,6 +23,25 @@ usb_camera/camera_info with exactly the image's header. The node is a thin adapt
 keeps the parameters, publishers and services; opening, reading, losing and reopening the camera
 is the camera layer's CaptureLoop (py_vision.capture), which calls publish_image() with each new
 frame.
+
+One node, managed or not. Its work follows the ROS 2 lifecycle (rclpy.lifecycle, the same on
+Humble 3.3 and Jazzy 7.1):
+
+- configure: parameters checked, publishers made, the camera opened and negotiated;
+- activate: the capture thread starts; frames, compressed and camera_info are published;
+- deactivate: the capture thread stops and so does the stream (VIDIOC_STREAMOFF), which frees
+  the camera's USB bandwidth; the device stays open with its buffers and controls, so nobody
+  else can take it and activate resumes at once;
+- cleanup: the camera and the publishers are released (back to unconfigured);
+- shutdown, from any state: everything released, and the process ends (status 0).
+
+With ``managed:=false`` (the default) the node takes configure and activate itself while it
+starts, has no lifecycle services, and a failure is a start-up error (one line, status 1). With
+``managed:=true`` it starts unconfigured and serves the lifecycle services (`ros2 lifecycle
+set`, launch_ros's LifecycleNode, any lifecycle manager): a failed transition says why in one
+line and leaves the node ready to try again. Only the capture thread publishes, and it runs only
+while active; /diagnostics is published in every state. Ctrl-C ends the node cleanly in any
+state (node_main calls close()).
 """
 
 import sys
@@ -39,11 +58,12 @@ from py_vision.capture.pixel_formats import names_accepted
 from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
 from py_vision.diagnostics import Diagnostics
-from py_vision.node_main import ConfigError
+from py_vision.node_main import ConfigError, main_for
 from py_vision.params import Parameters, Spec
 from py_vision.qos import publisher_qos, RELIABILITY
 from py_vision.transport import ImagePublisher, sibling_topic
 import rclpy
+from rclpy.lifecycle import LifecycleNodeMixin, TransitionCallbackReturn
 from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.time import Time
@@ -54,15 +74,20 @@ import yaml
 
 IMAGE_TOPIC = 'usb_camera/image'
 MANAGED = Spec('managed', False, 'run as a lifecycle node: configure opens the camera, activate '
-               'publishes, deactivate releases the camera (it stops streaming), cleanup '
-               'releases the publishers too (ros2 lifecycle set)')
-
-
+               'publishes, deactivate stops streaming (the camera kept open), cleanup '
+               'releases the camera and the publishers (ros2 lifecycle set)')
+SUCCESS = TransitionCallbackReturn.SUCCESS
+FAILURE = TransitionCallbackReturn.FAILURE
 # How often the control parameters are brought up to date with the device's values.
 CONTROL_SYNC_PERIOD_S = 0.5
+# After shutdown the process ends this much later, once the answer to the transition request
+# has gone out (ending rclpy at once could lose it, and `ros2 lifecycle set` would wait).
+EXIT_AFTER_SHUTDOWN_S = 0.5
 
 
-class USBImagePublisher(Node):
+class USBImagePublisher(LifecycleNodeMixin, Node):
+    """The camera node; its camera follows the lifecycle state (see the module's text)."""
+
     NODE_NAME = 'usbcam_publisher'
     PUBLISHES = dds.OWN_SIZE
     SUMMARY = ('Publishes a USB camera (or a video file, or the built-in synthetic camera) as '
@@ -98,32 +123,45 @@ class USBImagePublisher(Node):
 
     # What close() finds when start-up was interrupted before these were made.
     capture = controls = images = None
+    failed = False
     _log_name = NODE_NAME
+    _state = 'unconfigured'
     raw_published = compressed_published = frames_decoded = 0
 
-    def __init__(self):
-        super().__init__(self.NODE_NAME)
-        self._setup(self._declare_parameters())
-        self._make_publishers()
-        self._configure_camera()
-        self._declare_controls()
-        self._load_calibration()
-        try:
-            self.capture.start()
-        except SourceError as error:
-            raise ConfigError(str(error))
+    def __init__(self, **node_options):
+        # node_options: rclpy Node's keyword arguments (context, parameter_overrides...).
+        Node.__init__(self, self.NODE_NAME, **node_options)
+        self._params = Parameters(self)
+        self.managed = self._params.declare(MANAGED)
+        # A managed node checks them at configure: an unusable value fails configure instead
+        # of ending the node.
+        self._parameter_errors = [] if self.managed else None
+        self._failure = None   # why the last transition failed, in one line
+        self._setup(self._declare_parameters(self._parameter_errors))
+        if self.managed:
+            LifecycleNodeMixin.__init__(self)
+            self.get_logger().info(
+                'managed: unconfigured; waiting for configure (ros2 lifecycle set %s '
+                'configure)' % self.get_fully_qualified_name())
+            return
+        # Not managed: no state machine, no lifecycle services; the node takes the two
+        # transitions itself, and a failure is a start-up error.
+        for step in (self.on_configure, self.on_activate):
+            if step(None) != SUCCESS:
+                raise ConfigError(self._failure)
 
     def _declare_parameters(self, errors=None):
         """
-        Declare the node's own parameters; return their checked values.
+        Declare the node's own parameters but `managed`; return their checked values.
 
         With a list for errors, an unusable value is added to it (and the default used)
         instead of raising ConfigError. The camera's controls are declared once it is open.
         """
-        self._params = Parameters(self)
         live = {'jpeg_quality': self._set_jpeg_quality, 'frame_id': self._set_frame_id}
         values = {}
         for spec in self.OWN_PARAMETERS:
+            if spec is MANAGED:
+                continue
             try:
                 values[spec.name] = self._params.declare(spec, live.get(spec.name))
             except ConfigError as error:
@@ -150,7 +188,6 @@ class USBImagePublisher(Node):
         self.frame_id = values['frame_id']
         self.jpeg_quality = values['jpeg_quality']
         self._synthetic = SyntheticDevices()
-        self.failed = False
         self.capture = CaptureLoop(self._open_camera, self.publish_image, self.get_logger(),
                                    name=self.video_device, on_failure=self._capture_failed)
         self._monitor = CameraMonitor()
@@ -202,7 +239,7 @@ class USBImagePublisher(Node):
 
     def lifecycle_state(self):
         """Return the lifecycle state of a managed node; None: the plain node, always on."""
-        return None
+        return self._state if self.managed else None
 
     # --- parameters ------------------------------------------------------------------
 
@@ -269,15 +306,130 @@ class USBImagePublisher(Node):
         self.raw_published += raw
         self.compressed_published += compressed
 
+    # --- lifecycle transitions (on the executor's thread, or in __init__ when not managed) -
+
+    def _fail(self, what, reason):
+        """Remember why a transition failed; a managed node says it now (one line)."""
+        self._failure = reason
+        if self.managed:
+            self.get_logger().error('%s failed: %s' % (what, reason))
+        return FAILURE
+
+    def on_configure(self, state):
+        """Check the parameters, make the publishers, open and negotiate the camera."""
+        if self._parameter_errors:
+            for error in self._parameter_errors[:-1]:
+                self.get_logger().error('configure failed: %s' % error)
+            return self._fail('configure', self._parameter_errors[-1])
+        self._make_publishers()
+        try:
+            self._configure_camera()
+            # A value given for one of the camera's controls is checked only now.
+            self._declare_controls()
+        except ConfigError as error:
+            self._release_all()
+            return self._fail('configure', str(error))
+        self._load_calibration()
+        self._state = 'inactive'
+        if self.managed:
+            self.get_logger().info('configured: camera open, not streaming')
+        return SUCCESS
+
+    def on_activate(self, state):
+        """Start streaming, capturing and publishing (resuming the stream after a deactivate)."""
+        try:
+            self.capture.start()
+        except SourceError as error:
+            return self._fail('activate', str(error))
+        self._state = 'active'
+        if self.managed:
+            self.get_logger().info('activated: publishing on %s' % self.images.raw.topic_name)
+        return SUCCESS
+
+    def on_deactivate(self, state):
+        """Stop capturing and streaming; the device stays open with its buffers and controls."""
+        if not self.capture.pause():
+            get_logger(self._log_name + '.camera').warning(
+                'the capture thread of %s is still in a read; streaming stops when it ends'
+                % self.video_device)
+        self._state = 'inactive'
+        self.get_logger().info('deactivated: streaming stopped after %d frames; the camera '
+                               'stays open' % self.capture.stats().frames)
+        return SUCCESS
+
+    def on_cleanup(self, state):
+        """Release the camera and the publishers; fail, keeping both, if it will not close."""
+        if not self._release_all():
+            return self._fail('cleanup', 'the capture thread of %s did not end; the camera and '
+                              'its topics are kept (try cleanup again)' % self.video_device)
+        self._state = 'unconfigured'
+        self.get_logger().info('cleaned up: camera released')
+        return SUCCESS
+
+    def on_shutdown(self, state):
+        """Release everything, then end the process once the answer has gone out."""
+        self._release_all()
+        self._state = 'finalized'
+        self.get_logger().info('shut down from %s: camera released; exiting' % state.label)
+        self._exit_timer = self.create_timer(EXIT_AFTER_SHUTDOWN_S, self._exit)
+        return SUCCESS
+
+    def on_error(self, state):
+        """Release everything after a transition raised; the node goes back to unconfigured."""
+        self.get_logger().error('a transition from %s failed; releasing the camera' %
+                                state.label)
+        self._release_all()
+        self._state = 'unconfigured'
+        return SUCCESS
+
+    # --- releasing -------------------------------------------------------------------
+
+    def _close_camera(self):
+        """Stop capturing and release the device; False if the capture thread is stuck."""
+        if self.capture.close():
+            return True
+        get_logger(self._log_name + '.camera').warning(
+            '%s is still busy; the system releases it at exit' % self.video_device)
+        return False
+
+    def _release_topics(self):
+        if self.images is None:
+            return
+        for publisher in (self.images.raw, self.images.compressed, self.info_publisher):
+            self.destroy_publisher(publisher)
+        self.images = None
+        service = getattr(self, 'set_info_service', None)
+        if service is not None:
+            self.destroy_service(service)
+            self.set_info_service = None
+
+    def _release_all(self):
+        """Close the camera, then the topics; False, keeping the topics, if it did not close."""
+        # A capture thread still running may publish at any moment: its publishers stay.
+        if not self._close_camera():
+            return False
+        self._release_topics()
+        return True
+
+    def _exit(self):
+        self.destroy_timer(self._exit_timer)
+        rclpy.try_shutdown(context=self.context)
+
     def close(self):
-        """Stop capturing and release the camera."""
+        """Release whatever this state holds (Ctrl-C, SIGTERM, a failed start, the end)."""
         capture = self.capture
-        if capture is None:  # start-up was interrupted before the camera layer existed
+        if capture is None:  # start-up was interrupted before the capture loop existed
+            return
+        started, opened = capture.running, capture.camera is not None
+        if not self._close_camera():
             return
         logger = get_logger(self._log_name + '.camera')
-        started, opened = capture.running, capture.camera is not None
-        if not capture.close():
-            logger.warning('%s is still busy; the system releases it at exit' % self.video_device)
+        if self.managed:
+            if started or opened:
+                logger.info('camera released in state %s after %d frames' % (
+                    self._state, capture.stats().frames))
+            else:
+                logger.info('stopped in state %s; no camera was open' % self._state)
         elif started:
             logger.info('camera released after %d frames (%d raw, %d compressed published; '
                         '%d JPEG encoded, %d decoded)' % (
@@ -326,3 +478,10 @@ def list_formats(argv):
 
 
 USBImagePublisher.COMMANDS = {'--list-formats': list_formats}
+
+
+main = main_for(USBImagePublisher)
+
+
+if __name__ == '__main__':
+    main()

@@ -39,7 +39,10 @@ IMAGE_TOPIC = 'usb_camera/image'
 
 
 class VideoSubscriber(Node):
+    """The viewer node (node_main.NodeProgram): shows a topic's frames, logs rate and latency."""
+
     NODE_NAME = 'usbcam_subscriber'
+    COMMANDS = {}
     PUBLISHES = dds.NO_IMAGES
     SUMMARY = ('Shows the frames of usb_camera/image (remap it to watch another topic) in an '
                'OpenCV window or a browser, and logs their rate and latency.')
@@ -51,6 +54,7 @@ class VideoSubscriber(Node):
     )
 
     display = None  # what close() finds when start-up was interrupted before it was made
+    failed = False   # it never stops of an error of its own
 
     def __init__(self):
         super().__init__(self.NODE_NAME)

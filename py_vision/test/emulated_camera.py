@@ -62,14 +62,18 @@ _MAGIC = 0x45435655
 _STATE_SIZE = 4096
 _OFF_NODE, _OFF_PLUGGED, _OFF_GENERATION, _OFF_STALLED, _OFF_DENIED = 4, 8, 12, 16, 20
 _OFF_OWNER, _OFF_FORMAT, _OFF_FRAME, _OFF_INTERVAL = 24, 32, 36, 40
-_OFF_SENSOR, _OFF_SERVED, _OFF_VALUES, _OFF_RENDER_NS = 48, 56, 64, 320
+_OFF_SENSOR, _OFF_SERVED, _OFF_VALUES, _OFF_RENDER_NS, _OFF_WIDE = 48, 56, 64, 320, 328
 _MAX_CONTROLS = 48
 # The served ring (struct served_record in uvc_emulator.c): tag (index + 1), length, flags,
 # CRC-32, reserved; frame `index` at slot index % _SERVED_SLOTS.
 _SERVED = struct.Struct('<QIIII')
 _SERVED_SLOTS = 4096
 _SERVED_CORRUPT = 1
-_TYPES = {'integer': 1, 'boolean': 2, 'menu': 3}
+# Control types (enum v4l2_ctrl_type) and the size of one element of each.
+_TYPES = {'integer': 1, 'boolean': 2, 'menu': 3, 'button': 4, 'integer64': 5, 'string': 7,
+          'bitmask': 8, 'integer_menu': 9, 'u8': 0x100, 'u16': 0x101, 'u32': 0x102,
+          'area': 0x106}
+_ELEM_SIZES = {'integer64': 8, 'u8': 1, 'u16': 2, 'area': 8}
 _FLAG_READ_ONLY = 0x4
 _FAULTS = ('stalled', 'denied')
 EFFECTS = ('brightness', 'contrast', 'saturation', 'gain', 'exposure', 'white_balance')
@@ -238,6 +242,11 @@ def load_model(model):
     by_name = {c['name']: c for c in data['controls']}
     for index, control in enumerate(data['controls']):
         control['index'] = index
+        if control['type'] not in _TYPES:
+            raise ValueError('%s: %s has type %r, not one of %s'
+                             % (path, control['name'], control['type'], ', '.join(_TYPES)))
+        for key in ('min', 'max', 'step', 'default'):
+            control.setdefault(key, 0)   # a button, an area: no range
         if control.get('effect') not in (None,) + EFFECTS:
             raise ValueError('%s: %s has effect %r, not one of %s'
                              % (path, control['name'], control['effect'], ', '.join(EFFECTS)))
@@ -307,11 +316,14 @@ class EmulatedCamera:
             for master, value in c.get('inactive_unless', {}).items():
                 master_id, manual = by_name[master]['id'], value
             flags = _FLAG_READ_ONLY if c.get('read_only') else 0
-            lines.append('control %#x %d %d %d %d %d %d %#x %d %s' % (
-                c['id'], _TYPES[c['type']], c['min'], c['max'], c.get('step', 1), c['default'],
-                flags, master_id, manual, c['label']))
+            size = c['max'] + 1 if c['type'] == 'string' else _ELEM_SIZES.get(c['type'], 4)
+            lines.append('control %#x %d %d %d %d %d %d %#x %d %d %s' % (
+                c['id'], _TYPES[c['type']], c['min'], c['max'], c['step'], c['default'],
+                flags, master_id, manual, size, c['label']))
             for index, name in sorted((c.get('menu') or {}).items()):
                 lines.append('menu %#x %d %s' % (c['id'], index, name))
+            if c.get('dims'):
+                lines.append('dims %#x %s' % (c['id'], ' '.join(map(str, c['dims']))))
             if c.get('effect'):
                 lines.append('effect %#x %s' % (c['id'], c['effect']))
         (self.dir / 'camera.conf').write_text('\n'.join(lines) + '\n')
@@ -348,7 +360,14 @@ class EmulatedCamera:
         self._put('I', _OFF_FRAME, sizes.index(default) if default in sizes else 0)
         self._put('I', _OFF_INTERVAL, 0)
         for control in self.model['controls']:
-            self._put('i', _OFF_VALUES + 4 * control['index'], control['default'])
+            if control['type'] == 'integer64':
+                self._put('q', _OFF_WIDE + 8 * control['index'], control['default'])
+            elif control['type'] == 'button':
+                self._put('i', _OFF_VALUES + 4 * control['index'], 0)   # presses
+            else:
+                # Held as the kernel's s32 (a bitmask's top bit makes it negative there).
+                self._put('I', _OFF_VALUES + 4 * control['index'],
+                          control['default'] & 0xFFFFFFFF)
         self._put('I', _OFF_PLUGGED, 1)
 
     # -- what a test uses
@@ -481,9 +500,17 @@ class EmulatedCamera:
         raise KeyError('%s has no control %r' % (self.model['model'], name_or_id))
 
     def control(self, name_or_id):
-        """Return the device's current value of this control, as every process sees it."""
-        index = self.control_info(name_or_id)['index']
-        return self._get('i', _OFF_VALUES + 4 * index)
+        """
+        Return the device's current value of this control, as every process sees it.
+
+        A button's value is how often it was pressed since the camera was plugged in; a
+        bitmask's is unsigned.
+        """
+        info = self.control_info(name_or_id)
+        if info['type'] == 'integer64':
+            return self._get('q', _OFF_WIDE + 8 * info['index'])
+        value = self._get('i', _OFF_VALUES + 4 * info['index'])
+        return value & 0xFFFFFFFF if info['type'] == 'bitmask' else value
 
     def close(self):
         """Unplug the camera and remove its directory."""

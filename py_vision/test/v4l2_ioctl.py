@@ -65,8 +65,14 @@ CAP_STREAMING = 0x04000000
 FMT_FLAG_COMPRESSED = 0x1
 CTRL_FLAG_READ_ONLY = 0x4
 CTRL_FLAG_INACTIVE = 0x10
+CTRL_FLAG_WRITE_ONLY = 0x40
+CTRL_FLAG_HAS_PAYLOAD = 0x100
+CTRL_FLAG_EXECUTE_ON_WRITE = 0x200
 CTRL_FLAG_NEXT_CTRL = 0x80000000
+CTRL_FLAG_NEXT_COMPOUND = 0x40000000
 CTRL_TYPE_INTEGER, CTRL_TYPE_BOOLEAN, CTRL_TYPE_MENU, CTRL_TYPE_CTRL_CLASS = 1, 2, 3, 6
+CTRL_TYPE_BUTTON, CTRL_TYPE_INTEGER64, CTRL_TYPE_STRING = 4, 5, 7
+CTRL_TYPE_BITMASK, CTRL_TYPE_INTEGER_MENU, CTRL_TYPE_U32, CTRL_TYPE_AREA = 8, 9, 0x102, 0x106
 BUF_FLAG_TIMESTAMP_MONOTONIC = 0x2000
 
 
@@ -196,7 +202,21 @@ def query_ext_control(fd, control_id):
         'qqQqIIII', buf, 40)
     return {'id': cid, 'type': kind, 'name': _text(name), 'min': minimum, 'max': maximum,
             'step': step, 'default': default, 'flags': flags, 'elem_size': elem_size,
-            'elems': elems, 'dims': dims}
+            'elems': elems, 'dims': dims, 'sizes': list(struct.unpack_from('4I', buf, 80))}
+
+
+def list_ext_controls(fd, which=CTRL_FLAG_NEXT_CTRL):
+    """Return every control VIDIOC_QUERY_EXT_CTRL walks with these NEXT flags, classes too."""
+    controls, last = [], 0
+    while True:
+        try:
+            control = query_ext_control(fd, last | which)
+        except OSError as error:
+            if error.errno != errno.EINVAL:
+                raise
+            return controls
+        controls.append(control)
+        last = control['id']
 
 
 def list_controls(fd):
@@ -219,6 +239,12 @@ def query_menu(fd, control_id, index):
     return _text(buf[8:40])
 
 
+def query_int_menu(fd, control_id, index):
+    """Return the value of an integer menu's entry (the union's 64-bit member)."""
+    buf = _ioctl(fd, VIDIOC_QUERYMENU, struct.pack('II', control_id, index) + bytes(36))
+    return struct.unpack_from('q', buf, 8)[0]
+
+
 def get_control(fd, control_id):
     """VIDIOC_G_CTRL."""
     return struct.unpack_from('Ii', _ioctl(fd, VIDIOC_G_CTRL, struct.pack('Ii', control_id, 0)))[1]
@@ -230,24 +256,25 @@ def set_control(fd, control_id, value):
     return struct.unpack_from('Ii', buf)[1]
 
 
-def _ext_controls(fd, request, values):
-    """Run an EXT_CTRLS ioctl on [(id, value)]; return the values after it."""
+def _ext_controls(fd, request, values, wide=False):
+    """Run an EXT_CTRLS ioctl on [(id, value)]; return the values after it (value64: wide)."""
+    layout = '=IIIq' if wide else '=IIIi'
     items = ctypes.create_string_buffer(20 * len(values))
     for i, (cid, value) in enumerate(values):
-        struct.pack_into('=IIIi', items, 20 * i, cid, 0, 0, value)
+        struct.pack_into(layout, items, 20 * i, cid, 0, 0, value)
     head = struct.pack('IIIiIIQ', 0, len(values), 0, 0, 0, 0, ctypes.addressof(items))
     _ioctl(fd, request, head)
-    return [struct.unpack_from('=IIIi', items.raw, 20 * i)[3] for i in range(len(values))]
+    return [struct.unpack_from(layout, items.raw, 20 * i)[3] for i in range(len(values))]
 
 
-def get_ext_controls(fd, ids):
-    """VIDIOC_G_EXT_CTRLS for these control ids; return their values."""
-    return _ext_controls(fd, VIDIOC_G_EXT_CTRLS, [(cid, 0) for cid in ids])
+def get_ext_controls(fd, ids, wide=False):
+    """VIDIOC_G_EXT_CTRLS for these control ids; return their values (value64: wide)."""
+    return _ext_controls(fd, VIDIOC_G_EXT_CTRLS, [(cid, 0) for cid in ids], wide)
 
 
-def set_ext_controls(fd, values):
+def set_ext_controls(fd, values, wide=False):
     """VIDIOC_S_EXT_CTRLS with [(id, value)]; return the values the driver kept."""
-    return _ext_controls(fd, VIDIOC_S_EXT_CTRLS, values)
+    return _ext_controls(fd, VIDIOC_S_EXT_CTRLS, values, wide)
 
 
 class Stream:

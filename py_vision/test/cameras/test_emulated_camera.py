@@ -337,6 +337,64 @@ def test_controls_answer_as_uvcvideo_and_persist_across_opens(emulated_camera):
     assert again['value'] == 255
 
 
+def test_every_control_type_answers_as_the_kernels_controls_framework(emulated_camera):
+    camera = emulated_camera('every_control')
+    ids = {c['name']: c['id'] for c in camera.model['controls']}
+    [seen] = run(camera, """
+        fd = v4l2.open_device('/dev/video40')
+        ids = %r
+        simple = v4l2.list_ext_controls(fd)
+        compound = v4l2.list_ext_controls(fd, v4l2.CTRL_FLAG_NEXT_COMPOUND)
+        both = v4l2.list_ext_controls(fd, v4l2.CTRL_FLAG_NEXT_CTRL | v4l2.CTRL_FLAG_NEXT_COMPOUND)
+        wide, button, bits = ids['integer_64_bits'], ids['button'], ids['bitmask']
+        out = {'simple': [c['name'] for c in simple], 'compound': [c['name'] for c in compound],
+               'both': {c['name']: c for c in both},
+               'old_wide': v4l2.query_control(fd, wide),
+               'wide_g_ctrl': error_of(v4l2.get_control, fd, wide),
+               'wide_default': v4l2.get_ext_controls(fd, [wide], wide=True),
+               'wide_set': v4l2.set_ext_controls(fd, [(wide, -(1 << 62) - 3)], wide=True),
+               'wide_get': v4l2.get_ext_controls(fd, [wide], wide=True),
+               'int_menu': [error_of(v4l2.query_int_menu, fd, ids['integer_menu'], i) or
+                            v4l2.query_int_menu(fd, ids['integer_menu'], i) for i in range(9)],
+               'button_get': error_of(v4l2.get_control, fd, button),
+               'string_get': error_of(v4l2.get_control, fd, ids['string'])}
+        v4l2.set_control(fd, button, 0)
+        v4l2.set_ext_controls(fd, [(button, 1)])
+        out['bits'] = v4l2.set_control(fd, bits, 0x7fffffff) & 0xffffffff
+        os.close(fd)
+        say(**out)
+    """ % ids)
+    # V4L2_CTRL_FLAG_NEXT_CTRL walks the controls with one value; NEXT_COMPOUND the arrays and
+    # compound types; both together, everything.
+    assert 'U32 1 Element Array' not in seen['simple'] and 'Area' not in seen['simple']
+    assert seen['compound'] == ['U32 1 Element Array', 'Area']
+    assert set(seen['both']) == set(seen['simple']) | set(seen['compound'])
+    both = seen['both']
+    assert both['Integer 64 Bits']['type'] == v4l2.CTRL_TYPE_INTEGER64
+    wide = both['Integer 64 Bits']
+    assert (wide['min'], wide['max']) == (-2 ** 63, 2 ** 63 - 1)
+    assert (both['U32 1 Element Array']['dims'], both['U32 1 Element Array']['elems']) == (1, 1)
+    assert both['Area']['type'] == v4l2.CTRL_TYPE_AREA
+    for name in ('String', 'Area', 'U32 1 Element Array'):
+        assert both[name]['flags'] & v4l2.CTRL_FLAG_HAS_PAYLOAD, name
+    assert both['Button']['flags'] & v4l2.CTRL_FLAG_WRITE_ONLY
+    assert both['Button']['flags'] & v4l2.CTRL_FLAG_EXECUTE_ON_WRITE
+    assert both['Gain']['flags'] & v4l2.CTRL_FLAG_INACTIVE   # gain_automatic is on
+    # The old VIDIOC_QUERYCTRL has no room for a 64-bit range; G_CTRL no room for the value.
+    assert (seen['old_wide']['min'], seen['old_wide']['max']) == (0, 0)
+    assert seen['wide_g_ctrl'] == 'EINVAL' and seen['string_get'] == 'EINVAL'
+    assert seen['wide_default'] == [0]
+    assert seen['wide_set'] == seen['wide_get'] == [-(1 << 62) - 3]
+    assert camera.control('integer_64_bits') == -(1 << 62) - 3
+    assert seen['int_menu'] == ['EINVAL', 'EINVAL', 2, 3, 5, 8, 13, 21, 42]
+    # A button cannot be read; each write presses it, through S_CTRL or S_EXT_CTRLS.
+    assert seen['button_get'] == 'EACCES'
+    assert camera.control('button') == 2
+    # A bitmask keeps the bits of its mask.
+    assert seen['bits'] == 0x80402010 & 0x7fffffff
+    assert camera.control('bitmask') == 0x80402010 & 0x7fffffff
+
+
 def test_buffers_carry_monotonic_timestamps_and_sequence_numbers(emulated_camera):
     camera = emulated_camera(model='vga_yuyv', node=41)
     [seen] = run(camera, """

@@ -26,7 +26,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
 from param_client import get_parameters
-from py_vision.managed_publisher import ManagedPublisher
+from py_vision.usbcam_publisher import USBImagePublisher
 import pytest
 from rclpy.lifecycle import TransitionCallbackReturn
 from rclpy.parameter import Parameter
@@ -155,10 +155,10 @@ def test_every_transition_publishes_only_while_active(launch, peer):
                what='frames, compressed frames and camera_info while active')
     assert raw[0].width == 160 and info[0].header == raw[0].header
 
-    # deactivate: the camera is released (stops streaming), nothing more is published.
+    # deactivate: the camera stops streaming and stays open, nothing more is published.
     assert lifecycle.set(Transition.TRANSITION_DEACTIVATE)
     assert lifecycle.get() == 'inactive'
-    assert 'deactivated: camera released' in node.output()
+    assert 'deactivated: streaming stopped after' in node.output()
     counts = (len(raw), len(compressed), len(info))
     _, values = status.wait_reports()
     frames = values['frames']
@@ -166,10 +166,10 @@ def test_every_transition_publishes_only_while_active(launch, peer):
     assert values['frames'] == frames, 'the camera still captures while inactive'
     assert (len(raw), len(compressed), len(info)) == counts
 
-    # activate again: the camera is opened again and publishing resumes.
+    # activate again: publishing resumes from the camera kept open.
     assert lifecycle.set(Transition.TRANSITION_ACTIVATE)
     wait_until(lambda: len(raw) >= counts[0] + 5, 30, what='frames after activating again')
-    assert node.output().count('opened synthetic') == 2
+    assert node.output().count('opened synthetic') == 1
 
     # deactivate, cleanup: back to unconfigured with the camera and the topics released.
     assert lifecycle.set(Transition.TRANSITION_DEACTIVATE)
@@ -182,7 +182,7 @@ def test_every_transition_publishes_only_while_active(launch, peer):
     # and configurable again.
     assert lifecycle.set(Transition.TRANSITION_CONFIGURE)
     assert lifecycle.get() == 'inactive'
-    assert node.output().count('opened synthetic') == 3
+    assert node.output().count('opened synthetic') == 2
     assert 'Traceback' not in node.output()
 
 
@@ -289,7 +289,7 @@ def test_the_plain_node_is_not_a_lifecycle_node(launch, peer):
     assert not [name for name in services if 'change_state' in name or 'get_state' in name]
 
 
-class StuckCapture(ManagedPublisher):
+class StuckCapture(USBImagePublisher):
     """The managed node, with a capture thread that does not end when asked (on demand)."""
 
     stuck = False
@@ -302,7 +302,7 @@ class StuckCapture(ManagedPublisher):
 
 def test_cleanup_fails_and_keeps_the_topics_when_the_capture_thread_does_not_end(peer):
     node = StuckCapture(context=peer.context, parameter_overrides=[
-        Parameter(name, value=value) for name, value in CAMERA.items() if name != 'managed'])
+        Parameter(name, value=value) for name, value in CAMERA.items()])
     try:
         assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
         topics = node.images

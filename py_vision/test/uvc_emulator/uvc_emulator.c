@@ -90,8 +90,9 @@ struct shared_state {
     uint32_t reserved;       /* 44 */
     uint64_t sensor_frames;  /* 48: index of the next frame the sensor makes */
     uint64_t frames_served;  /* 56: frames delivered into buffers */
-    int32_t values[64];      /* 64: control values, in camera.conf order */
+    int32_t values[64];      /* 64: control values, in camera.conf order (a button: presses) */
     uint64_t render_ns;      /* 320: CPU time spent making frames (all processes) */
+    int64_t wide[64];        /* 328: the values of 64-bit controls, at the same index */
 };
 
 /* One JPEG handed to a DQBUF, in the served file; the harness reads it (served_jpegs). The
@@ -123,17 +124,19 @@ struct format_desc {
 struct menu_entry {
     int32_t index;
     char name[32];
+    int64_t value;                         /* an integer menu's entry */
 };
 
 struct control_desc {
     uint32_t id, type;
-    int32_t minimum, maximum, step, def;
+    int64_t minimum, maximum, step, def;
     uint32_t flags;
     uint32_t master_id;
     int32_t master_manual;
     char name[32];
     uint32_t n_menu;
     struct menu_entry menu[MAX_MENU];
+    uint32_t elem_size, n_dims, dims[4];   /* an array's dimensions (n_dims 0: one value) */
     int effect;                            /* what the control does to the picture */
 };
 
@@ -371,10 +374,29 @@ static void load_camera(const char *dir)
         } else if (!strcmp(line, "control") && cam->n_controls < MAX_CONTROLS) {
             struct control_desc *c = &cam->controls[cam->n_controls++];
             int n = 0;
-            sscanf(rest, "%i %u %d %d %d %d %u %i %d %n", (int *)&c->id, &c->type, &c->minimum,
-                   &c->maximum, &c->step, &c->def, &c->flags, (int *)&c->master_id,
-                   &c->master_manual, &n);
+            long long lo = 0, hi = 0, step = 0, def = 0;
+            sscanf(rest, "%i %u %lli %lli %lli %lli %u %i %d %u %n", (int *)&c->id, &c->type,
+                   &lo, &hi, &step, &def, &c->flags, (int *)&c->master_id, &c->master_manual,
+                   &c->elem_size, &n);
+            c->minimum = lo;
+            c->maximum = hi;
+            c->step = step;
+            c->def = def;
             copy_text(c->name, sizeof(c->name), rest + n);
+            /* what the kernel's controls framework adds to every such control */
+            if (c->type == V4L2_CTRL_TYPE_BUTTON)
+                c->flags |= V4L2_CTRL_FLAG_WRITE_ONLY | V4L2_CTRL_FLAG_EXECUTE_ON_WRITE;
+            if (c->type == V4L2_CTRL_TYPE_STRING || c->type >= V4L2_CTRL_COMPOUND_TYPES)
+                c->flags |= V4L2_CTRL_FLAG_HAS_PAYLOAD;
+        } else if (!strcmp(line, "dims")) {
+            uint32_t id, d[4] = {0};
+            int got = sscanf(rest, "%i %u %u %u %u", (int *)&id, &d[0], &d[1], &d[2], &d[3]);
+            for (uint32_t i = 0; got > 1 && i < cam->n_controls; i++)
+                if (cam->controls[i].id == id) {
+                    cam->controls[i].n_dims = (uint32_t)(got - 1);
+                    memcpy(cam->controls[i].dims, d, sizeof(d));
+                    cam->controls[i].flags |= V4L2_CTRL_FLAG_HAS_PAYLOAD;
+                }
         } else if (!strcmp(line, "effect")) {
             uint32_t id;
             char kind[32] = {0};
@@ -392,6 +414,7 @@ static void load_camera(const char *dir)
                     if (c->id == id && c->n_menu < MAX_MENU) {
                         c->menu[c->n_menu].index = index;
                         copy_text(c->menu[c->n_menu].name, 32, rest + n);
+                        c->menu[c->n_menu].value = strtoll(rest + n, NULL, 0);
                         c->n_menu++;
                     }
                 }
@@ -1495,8 +1518,28 @@ static struct control_desc *find_control(struct camera *cam, uint32_t id, int *i
     return NULL;
 }
 
-static int32_t control_value(struct camera *cam, int index)
+/* The kernel's classes of control: a value behind a pointer (a string, an array, a compound
+ * type) is read and written only through the EXT_CTRLS payload; INTEGER64 only as value64;
+ * the rest also with G/S_CTRL. */
+static int is_compound(const struct control_desc *c)
 {
+    return c->n_dims > 0 || c->type >= V4L2_CTRL_COMPOUND_TYPES;
+}
+
+static int is_pointer(const struct control_desc *c)
+{
+    return is_compound(c) || c->type == V4L2_CTRL_TYPE_STRING;
+}
+
+static int is_int(const struct control_desc *c)
+{
+    return !is_pointer(c) && c->type != V4L2_CTRL_TYPE_INTEGER64;
+}
+
+static int64_t control_value(struct camera *cam, int index)
+{
+    if (cam->controls[index].type == V4L2_CTRL_TYPE_INTEGER64)
+        return __atomic_load_n(&cam->state->wide[index], __ATOMIC_ACQUIRE);
     return __atomic_load_n(&cam->state->values[index], __ATOMIC_ACQUIRE);
 }
 
@@ -1519,22 +1562,29 @@ static int class_present(struct camera *cam, int k)
     return 0;
 }
 
-/* Fill a query for id (or the next id after it); 0, or an errno. */
+/* Fill a query for id (or the next id after it); 0, or an errno. As the kernel: with
+ * V4L2_CTRL_FLAG_NEXT_CTRL alone the next control that is neither an array nor of a compound
+ * type, with V4L2_CTRL_FLAG_NEXT_COMPOUND alone the next that is, with both the next one. */
 static int query_control(struct camera *cam, uint32_t req, struct v4l2_query_ext_ctrl *q)
 {
-    int next = (req & (V4L2_CTRL_FLAG_NEXT_CTRL | V4L2_CTRL_FLAG_NEXT_COMPOUND)) != 0;
+    uint32_t which = req & (V4L2_CTRL_FLAG_NEXT_CTRL | V4L2_CTRL_FLAG_NEXT_COMPOUND);
+    int next = which != 0;
     uint32_t id = req & ~(V4L2_CTRL_FLAG_NEXT_CTRL | V4L2_CTRL_FLAG_NEXT_COMPOUND);
     const struct control_desc *best = NULL;
     int best_class = -1;
     uint32_t best_id = UINT32_MAX;
     for (uint32_t i = 0; i < cam->n_controls; i++) {
-        uint32_t cid = cam->controls[i].id;
-        if ((!next && cid == id) || (next && cid > id && cid < best_id)) {
-            best = &cam->controls[i];
-            best_id = cid;
+        const struct control_desc *c = &cam->controls[i];
+        if (which == V4L2_CTRL_FLAG_NEXT_CTRL && is_compound(c))
+            continue;
+        if (which == V4L2_CTRL_FLAG_NEXT_COMPOUND && !is_compound(c))
+            continue;
+        if ((!next && c->id == id) || (next && c->id > id && c->id < best_id)) {
+            best = c;
+            best_id = c->id;
         }
     }
-    for (int k = 0; k < 2; k++) {
+    for (int k = 0; k < 2 && which != V4L2_CTRL_FLAG_NEXT_COMPOUND; k++) {
         if (!class_present(cam, k))
             continue;
         uint32_t cid = class_ids[k];
@@ -1566,6 +1616,12 @@ static int query_control(struct camera *cam, uint32_t req, struct v4l2_query_ext
     q->flags = best->flags;
     if (inactive(cam, best))
         q->flags |= V4L2_CTRL_FLAG_INACTIVE;
+    q->elem_size = best->elem_size;
+    q->nr_of_dims = best->n_dims;
+    for (uint32_t d = 0; d < best->n_dims; d++) {
+        q->dims[d] = best->dims[d];
+        q->elems *= best->dims[d];
+    }
     return 0;
 }
 
@@ -1598,25 +1654,34 @@ static int check_access(struct camera *cam, uint32_t id, int write,
     return inactive(cam, c) ? EACCES : 0;
 }
 
-/* Validate and adjust a value as uvcvideo does (clamp to the range, round to the step). */
-static int adjust_value(const struct control_desc *c, int32_t *value)
+/* Validate and adjust a value as the drivers do: integers clamped to the range and rounded to
+ * the step (uvcvideo), a bitmask's bits kept to the mask (the kernel's controls framework). */
+static int adjust_value(const struct control_desc *c, int64_t *value)
 {
     int64_t v = *value;
     switch (c->type) {
     case V4L2_CTRL_TYPE_INTEGER:
+    case V4L2_CTRL_TYPE_INTEGER64:
         if (v < c->minimum)
             v = c->minimum;
         if (v > c->maximum)
             v = c->maximum;
-        if (c->step > 1)
-            v = c->minimum + ((v - c->minimum + c->step / 2) / c->step) * c->step;
-        if (v > c->maximum)
-            v -= c->step;
+        if (c->step > 1) {
+            /* unsigned: a range from INT64_MIN does not overflow */
+            uint64_t offset = (uint64_t)v - (uint64_t)c->minimum, step = (uint64_t)c->step;
+            v = (int64_t)((uint64_t)c->minimum + (offset + step / 2) / step * step);
+            if (v > c->maximum)
+                v -= c->step;
+        }
         break;
     case V4L2_CTRL_TYPE_BOOLEAN:
         v = v ? 1 : 0;
         break;
-    case V4L2_CTRL_TYPE_MENU: {
+    case V4L2_CTRL_TYPE_BITMASK:
+        v = (int32_t)((uint32_t)v & (uint32_t)c->maximum);
+        break;
+    case V4L2_CTRL_TYPE_MENU:
+    case V4L2_CTRL_TYPE_INTEGER_MENU: {
         int ok = 0;
         if (v < 0 || v >= 32)
             return ERANGE;
@@ -1629,17 +1694,27 @@ static int adjust_value(const struct control_desc *c, int32_t *value)
     default:
         break;
     }
-    *value = (int32_t)v;
+    *value = v;
     return 0;
 }
 
-static void set_value(struct camera *cam, uint32_t id, int32_t value)
+/* Store a value; a button counts the presses instead, for the harness to read. */
+static void set_value(struct camera *cam, uint32_t id, int64_t value)
 {
     int index;
-    if (find_control(cam, id, &index))
-        __atomic_store_n(&cam->state->values[index], value, __ATOMIC_RELEASE);
+    const struct control_desc *c = find_control(cam, id, &index);
+    if (!c)
+        return;
+    if (c->type == V4L2_CTRL_TYPE_BUTTON)
+        __atomic_fetch_add(&cam->state->values[index], 1, __ATOMIC_ACQ_REL);
+    else if (c->type == V4L2_CTRL_TYPE_INTEGER64)
+        __atomic_store_n(&cam->state->wide[index], value, __ATOMIC_RELEASE);
+    else
+        __atomic_store_n(&cam->state->values[index], (int32_t)value, __ATOMIC_RELEASE);
 }
 
+/* G/S/TRY_EXT_CTRLS: 32-bit controls in `value`, INTEGER64 in `value64`. The payload of a
+ * string, array or compound control is not emulated (EINVAL). */
 static int ext_controls(struct handle *h, unsigned int cmd, struct v4l2_ext_controls *ctrls)
 {
     struct camera *cam = h->cam;
@@ -1654,6 +1729,8 @@ static int ext_controls(struct handle *h, unsigned int cmd, struct v4l2_ext_cont
         int err = check_access(cam, x->id, write, write ? ctrls : NULL);
         if (err == EACCES && defaults && !is_class_id(x->id))
             err = 0;
+        if (!err && is_pointer(find_control(cam, x->id, NULL)))
+            err = EINVAL;
         if (err) {
             ctrls->error_idx = write ? ctrls->count : i;
             return err;
@@ -1663,21 +1740,32 @@ static int ext_controls(struct handle *h, unsigned int cmd, struct v4l2_ext_cont
         struct v4l2_ext_control *x = &ctrls->controls[i];
         int index = 0;
         const struct control_desc *c = find_control(cam, x->id, &index);
+        int wide = c->type == V4L2_CTRL_TYPE_INTEGER64;
         if (!write) {
-            x->value = defaults ? c->def : control_value(cam, index);
+            int64_t v = defaults ? c->def : control_value(cam, index);
+            if (wide)
+                x->value64 = v;
+            else
+                x->value = (int32_t)v;
             continue;
         }
-        int32_t v = x->value;
+        int64_t v = wide ? x->value64 : x->value;
         int err = adjust_value(c, &v);
         if (err) {
             ctrls->error_idx = i;
             return err;
         }
-        x->value = v;
+        if (wide)
+            x->value64 = v;
+        else
+            x->value = (int32_t)v;
     }
     if (cmd == VIDIOC_S_EXT_CTRLS)
-        for (uint32_t i = 0; i < ctrls->count; i++)
-            set_value(cam, ctrls->controls[i].id, ctrls->controls[i].value);
+        for (uint32_t i = 0; i < ctrls->count; i++) {
+            struct v4l2_ext_control *x = &ctrls->controls[i];
+            const struct control_desc *c = find_control(cam, x->id, NULL);
+            set_value(cam, x->id, c->type == V4L2_CTRL_TYPE_INTEGER64 ? x->value64 : x->value);
+        }
     return 0;
 }
 
@@ -2075,11 +2163,15 @@ static int do_ioctl(struct handle *h, unsigned int cmd, void *arg)
         q->id = x.id;
         q->type = x.type;
         copy_text((char *)q->name, sizeof(q->name), x.name);
-        q->minimum = (int32_t)x.minimum;
-        q->maximum = (int32_t)x.maximum;
-        q->step = (int32_t)x.step;
-        q->default_value = (int32_t)x.default_value;
         q->flags = x.flags;
+        /* as the kernel: no 64-bit or compound range in the old structure */
+        if (x.type != V4L2_CTRL_TYPE_INTEGER64 && x.type < V4L2_CTRL_COMPOUND_TYPES &&
+            x.type != V4L2_CTRL_TYPE_BUTTON) {
+            q->minimum = (int32_t)x.minimum;
+            q->maximum = (int32_t)x.maximum;
+            q->step = (int32_t)x.step;
+            q->default_value = (int32_t)x.default_value;
+        }
         return 0;
     }
     case VIDIOC_QUERY_EXT_CTRL:
@@ -2087,12 +2179,15 @@ static int do_ioctl(struct handle *h, unsigned int cmd, void *arg)
     case VIDIOC_QUERYMENU: {
         struct v4l2_querymenu *m = arg;
         const struct control_desc *c = find_control(cam, m->id, NULL);
-        if (!c || c->type != V4L2_CTRL_TYPE_MENU)
+        if (!c || (c->type != V4L2_CTRL_TYPE_MENU && c->type != V4L2_CTRL_TYPE_INTEGER_MENU))
             return EINVAL;
         for (uint32_t i = 0; i < c->n_menu; i++)
             if ((uint32_t)c->menu[i].index == m->index) {
                 memset(m->name, 0, sizeof(m->name));
-                copy_text((char *)m->name, sizeof(m->name), c->menu[i].name);
+                if (c->type == V4L2_CTRL_TYPE_INTEGER_MENU)
+                    m->value = c->menu[i].value;
+                else
+                    copy_text((char *)m->name, sizeof(m->name), c->menu[i].name);
                 m->reserved = 0;
                 return 0;
             }
@@ -2100,24 +2195,29 @@ static int do_ioctl(struct handle *h, unsigned int cmd, void *arg)
     }
     case VIDIOC_G_CTRL: {
         struct v4l2_control *c = arg;
+        const struct control_desc *d = find_control(cam, c->id, NULL);
+        if (d && !is_int(d))
+            return EINVAL;    /* a 64-bit or pointer control: G_EXT_CTRLS only */
         int err = check_access(cam, c->id, 0, NULL), index = 0;
         if (err)
             return err;
         find_control(cam, c->id, &index);
-        c->value = control_value(cam, index);
+        c->value = (int32_t)control_value(cam, index);
         return 0;
     }
     case VIDIOC_S_CTRL: {
         struct v4l2_control *c = arg;
-        int err = check_access(cam, c->id, 1, NULL), index = 0;
+        const struct control_desc *d = find_control(cam, c->id, NULL);
+        if (d && !is_int(d))
+            return EINVAL;    /* a 64-bit or pointer control: S_EXT_CTRLS only */
+        int err = check_access(cam, c->id, 1, NULL);
         if (err)
             return err;
-        const struct control_desc *d = find_control(cam, c->id, &index);
-        int32_t v = c->value;
+        int64_t v = c->value;
         err = adjust_value(d, &v);
         if (err)
             return err;
-        c->value = v;
+        c->value = (int32_t)v;
         set_value(cam, c->id, v);
         return 0;
     }
