@@ -31,6 +31,7 @@ import os
 from typing import Dict, List, Optional, Tuple
 
 import cv2
+import numpy as np
 from py_vision.capture.controls import ControlInfo, OWNED_BY, USB_CAM_ALIASES
 from py_vision.capture.devices import CAMERA, classify, FILE
 from py_vision.capture.opencv_env import prepare_opencv

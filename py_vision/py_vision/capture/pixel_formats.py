@@ -34,8 +34,8 @@ from typing import Callable, Dict, Optional, Tuple
 import cv2
 import numpy as np
 
-__all__ = ['COLOUR_OUTPUTS', 'find', 'names_accepted', 'FORMATS', 'fourcc_code', 'fourcc_text', 'JPEG_FORMATS',
-           'OPENCV_BGR', 'OUTPUTS', 'PixelFormat', 'Plane', 'UVC_WEBCAM']
+__all__ = ['COLOUR_OUTPUTS', 'find', 'FORMATS', 'fourcc_code', 'fourcc_text', 'JPEG_FORMATS',
+           'names_accepted', 'OPENCV_BGR', 'OUTPUTS', 'PixelFormat', 'Plane', 'UVC_WEBCAM']
 
 # What a frame converts to; 'native' is the camera's own pixels.
 OUTPUTS = ('bgr8', 'rgb8', 'mono8', 'mono16', 'native')
@@ -65,7 +65,7 @@ class Plane:
 Conversion = Tuple[int, Callable[[np.ndarray], np.ndarray]]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)   # each format is one object: compared and hashed by identity
 class PixelFormat:
     """One pixel format, described once (see the module's text)."""
 
@@ -334,7 +334,7 @@ def _colour(code_name):
 
 
 def _mosaic(pattern):
-    """A Bayer pattern ('BGGR': B G on even rows, G R on odd ones) sampled from the picture."""
+    """Sample a Bayer pattern ('BGGR': B G on even rows, G R on odd ones) from the picture."""
     channel = {'B': 0, 'G': 1, 'R': 2}
 
     def make(yuyv):
@@ -412,7 +412,7 @@ def names_accepted() -> str:
     """Return, in words, the names `pixel_format` takes besides auto."""
     aliases = [name for pixel_format in FORMATS.values() for name in pixel_format.names
                if name != pixel_format.fourcc.lower()]
-    return '%s (case-insensitive), or usb_cam\'s %s' % (
+    return "%s (case-insensitive), or usb_cam's %s" % (
         ', '.join(fourcc.lower() for fourcc in FORMATS), ', '.join(aliases))
 
 

@@ -43,10 +43,10 @@ Faults for tests, as constructor options or in a ``video_device`` string
 (`SyntheticDevices.open`): ``fail_open`` (never opens), ``stop_after`` (unplugged after N
 frames), ``unplugged_for`` (reopening works again that many seconds after the unplug) and
 ``fail_every`` (every K-th read fails while the device stays open); ``formats`` says what
-the camera offers, by FourCC or usb_cam name (``synthetic?formats=grey``, ``yuyv,mjpeg``). Cameras opened
-through one `SyntheticDevices` with the same name and options share one state: the frame index
-and an unplug carry over to the next camera opened with them. The devices' clock is a
-constructor argument (a fake one in tests).
+the camera offers, by FourCC or usb_cam name (``synthetic?formats=grey`` or ``yuyv,mjpeg``).
+Cameras opened through one `SyntheticDevices` with the same name and options share one state:
+the frame index and an unplug carry over to the next camera opened with them. The devices'
+clock is a constructor argument (a fake one in tests).
 """
 
 import math

@@ -337,4 +337,3 @@ class V4L2Source:
                 0, BUF_TYPE_VIDEO_CAPTURE, MEMORY_MMAP, 0, 0)))
         except OSError:
             pass
-
