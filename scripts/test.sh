@@ -12,41 +12,45 @@ cd "$root"
 in_ci=false
 [ "${CI:-}" = true ] && in_ci=true
 
-# The browser-viewer test drives Debian's Chromium. Install it only when it is missing, only as
-# root with apt, and never upgrade what is installed: --no-upgrade keeps an installed chromium as
-# it is, and on a developer's PC apt is asked first (-s) whether the install would upgrade any
-# other package (a newer dependency); if so nothing is installed and the test is skipped.
-# CI's machine is the project's own: there chromium is installed whatever it needs.
-install_chromium() {
-  local log=/tmp/py_vision-apt.log plan upgrades
-  if [ -n "${CHROMIUM:-}" ] || command -v chromium >/dev/null 2>&1 \
-      || command -v chromium-browser >/dev/null 2>&1; then
-    return
-  fi
+# The browser-viewer test drives Debian's Chromium, and the lint of the viewer page's script
+# runs Debian's ESLint. Install each only when it is missing, only as root with apt, and never
+# upgrade what is installed: --no-upgrade keeps installed packages as they are, and on a
+# developer's PC apt is asked first (-s) whether the install would upgrade any other package
+# (a newer dependency); if so nothing is installed and the test is skipped. CI's machine is the
+# project's own: there the package is installed whatever it needs.
+# Usage: install_tool PACKAGE 'WHAT NEEDS IT' [COMMAND...] (the commands that show it is there)
+install_tool() {
+  local package=$1 what=$2 log=/tmp/py_vision-apt.log plan upgrades command
+  shift 2
+  for command in "$@"; do
+    command -v "$command" >/dev/null 2>&1 && return
+  done
   if [ "$(id -u)" != 0 ] || ! command -v apt-get >/dev/null 2>&1; then
-    echo '[test] chromium is missing: the browser-viewer test will be skipped (in CI: fail)' \
-      '(install Debian'"'"'s chromium, or set CHROMIUM=/path/to/chromium)'
+    echo "[test] $package is missing: $what will be skipped (in CI: fail)" \
+      "(install Debian's $package)"
     return
   fi
   if [ "$in_ci" = true ]; then
     apt-get update -qq >$log 2>&1 || true
-  elif ! plan=$(apt-get install -s --no-upgrade chromium 2>$log); then
-    echo "[test] chromium is missing and apt cannot install it (see $log; apt-get update" \
-      'may help): the browser-viewer test will be skipped'
+  elif ! plan=$(apt-get install -s --no-upgrade "$package" 2>$log); then
+    echo "[test] $package is missing and apt cannot install it (see $log; apt-get update" \
+      "may help): $what will be skipped"
     return
   elif upgrades=$(grep '^Inst [^ ]* \[' <<<"$plan"); then
     # 'Inst NAME [installed version] (new version ...)' is an upgrade.
-    echo "[test] chromium is missing, and installing it would upgrade $(wc -l <<<"$upgrades")" \
+    echo "[test] $package is missing, and installing it would upgrade $(wc -l <<<"$upgrades")" \
       "installed package(s) ($(head -3 <<<"$upgrades" | cut -d' ' -f2 | paste -sd,), ...):" \
-      'they are left as they are and the browser-viewer test will be skipped;' \
-      'to run it: apt-get install chromium'
+      "they are left as they are and $what will be skipped;" \
+      "to run it: apt-get install $package"
     return
   fi
-  echo '[test] installing chromium for the browser-viewer test'
-  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-upgrade chromium >>$log 2>&1 \
-    || echo "[test] could not install chromium (see $log)"
+  echo "[test] installing $package for $what"
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-upgrade "$package" >>$log 2>&1 \
+    || echo "[test] could not install $package (see $log)"
 }
-install_chromium
+[ -n "${CHROMIUM:-}" ] \
+  || install_tool chromium 'the browser-viewer test' chromium chromium-browser
+install_tool eslint "the lint of the viewer page's script" eslint
 
 # The emulated UVC cameras (py_vision/test/uvc_emulator) are a small C library the tests compile
 # with the system C compiler. Install one from the distribution where `cc` is missing (as root,

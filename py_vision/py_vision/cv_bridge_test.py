@@ -37,13 +37,13 @@ import numpy as np
 from py_vision import dds
 from py_vision.cv_bridge import CvBridge, CvBridgeError
 from py_vision.diagnostics import Diagnostics, OK, Recent, Status, WARN
-from py_vision.display import Display, DISPLAYS
 from py_vision.latest_frame import LatestFrameWorker
 from py_vision.node_main import main_for
 from py_vision.params import Parameters, Spec, viewer_specs
 from py_vision.qos import publisher_qos
 from py_vision.stats import stamp_age_s, StreamStats
 from py_vision.transport import ImagePublisher, subscribe, TRANSPORTS
+from py_vision.viewer.display import Display, DISPLAYS
 from rclpy.node import Node
 from sensor_msgs.msg import CompressedImage
 
@@ -133,7 +133,7 @@ class CvBridgeTest(Node):
                                values['web_port'], 'cv_bridge_image', values['web_token'])
         # Reliable with a queue of 10, the ROS 2 default: what the seed's rospy publisher
         # gives, and both reliable and best-effort subscribers (rqt_image_view) receive it.
-        self.images = ImagePublisher(self, 'cv_bridge_image', publisher_qos(), self.bridge_,
+        self.images = ImagePublisher(params, 'cv_bridge_image', publisher_qos(), self.bridge_,
                                      lazy_raw=False)
         self.publisher_ = self.images.raw
         # Frames can wait in three places: the subscription's DDS history, the executor
@@ -154,7 +154,7 @@ class CvBridgeTest(Node):
         self.display.attach(self, self.stats, self.publisher_.topic_name,
                             camera_topic=self.subscription_.topic_name)
         self._recent = Recent()
-        self.diagnostics = Diagnostics(self, hardware_id=self.subscription_.topic_name)
+        self.diagnostics = Diagnostics(params, hardware_id=self.subscription_.topic_name)
         self.diagnostics.add('processing', self.processing_status)
         self.get_logger().info('drawing on images from %s, publishing them on %s%s' % (
             self.subscription_.topic_name, self.publisher_.topic_name,

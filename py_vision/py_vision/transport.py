@@ -28,7 +28,8 @@ from typing import Callable, Optional, Tuple
 import cv2
 import numpy as np
 from py_vision.cv_bridge import fill_message_data
-from py_vision.qos import ImageSubscription
+from py_vision.params import Parameters
+from py_vision.qos import create_publisher, ImageSubscription
 from sensor_msgs.msg import CompressedImage, Image
 
 TRANSPORTS = ('raw', 'compressed')
@@ -74,12 +75,15 @@ class ImagePublisher:
     node's output, which a subscriber still being discovered must not miss).
     """
 
-    def __init__(self, node, base_topic: str, qos, bridge, lazy_raw: bool = True):
+    def __init__(self, parameters: Parameters, base_topic: str, qos, bridge,
+                 lazy_raw: bool = True):
         self._bridge = bridge
         self._lazy_raw = lazy_raw
-        self.raw = node.create_publisher(Image, base_topic, qos)
-        self.compressed = node.create_publisher(
-            CompressedImage, compressed_topic(node, base_topic), qos)
+        node = parameters.node
+        # Each topic takes the user's QoS overrides (qos.create_publisher).
+        self.raw = create_publisher(parameters, Image, base_topic, qos)
+        self.compressed = create_publisher(
+            parameters, CompressedImage, compressed_topic(node, base_topic), qos)
         self.jpeg_quality = 80
         self.encoded = 0        # JPEG encodes made here (not the camera's own)
 

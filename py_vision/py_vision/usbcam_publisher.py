@@ -55,12 +55,13 @@ from py_vision.capture import (
     Camera, CaptureLoop, pixel_format_accepted, SourceError, SyntheticDevices)
 from py_vision.capture.listing import device_listing
 from py_vision.capture.pixel_formats import names_accepted
+from py_vision.control_names import pixel_format_fourcc, USB_CAM_PIXEL_FORMATS
 from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
 from py_vision.diagnostics import Diagnostics
 from py_vision.node_main import ConfigError, main_for
 from py_vision.params import Parameters, Spec
-from py_vision.qos import publisher_qos, RELIABILITY
+from py_vision.qos import create_publisher, publisher_qos, RELIABILITY
 from py_vision.transport import ImagePublisher, sibling_topic
 import rclpy
 from rclpy.lifecycle import LifecycleNodeMixin, TransitionCallbackReturn
@@ -105,7 +106,9 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
              check=lambda v: v > 0, accepted='a number > 0 and <= 1000'),
         Spec('pixel_format', 'auto', 'what the camera sends, by the FourCC --list-formats '
              'prints; auto: what reaches the requested size and rate with the least work',
-             check=pixel_format_accepted, accepted='auto, or a FourCC: %s' % names_accepted()),
+             check=lambda v: pixel_format_accepted(pixel_format_fourcc(v)),
+             accepted="auto, or a FourCC: %s, or usb_cam's %s" % (
+                 names_accepted(), ', '.join(USB_CAM_PIXEL_FORMATS))),
         Spec('jpeg_quality', 80, 'JPEG quality of usb_camera/image/compressed when encoded '
              "here (an MJPEG camera's own JPEG is published as it is)", (1, 100), live=True),
         Spec('frame_id', 'usb_camera', 'header.frame_id of the images', check=bool,
@@ -184,23 +187,24 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         self.video_device = values['video_device']
         self.size = (values['image_width'], values['image_height'])
         self.framerate = values['framerate']
-        self.pixel_format = values['pixel_format']
+        self.pixel_format = pixel_format_fourcc(values['pixel_format'])
         self.frame_id = values['frame_id']
         self.jpeg_quality = values['jpeg_quality']
         self._synthetic = SyntheticDevices()
         self.capture = CaptureLoop(self._open_camera, self.publish_image, self.get_logger(),
-                                   name=self.video_device, on_failure=self._capture_failed)
+                                   name=self.video_device, on_failure=self._capture_failed,
+                                   on_refused=self._controls_refused)
         self._monitor = CameraMonitor()
-        self.diagnostics = Diagnostics(self, hardware_id=self.video_device)
+        self.diagnostics = Diagnostics(self._params, hardware_id=self.video_device)
         self.diagnostics.add('camera', self.camera_status)
 
     def _make_publishers(self):
         """Create the image, compressed and camera_info publishers."""
         qos = publisher_qos(self.values['reliability'], self.values['depth'])
-        self.images = ImagePublisher(self, IMAGE_TOPIC, qos, CvBridge())
+        self.images = ImagePublisher(self._params, IMAGE_TOPIC, qos, CvBridge())
         self.images.jpeg_quality = self.jpeg_quality
-        self.info_publisher = self.create_publisher(
-            CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
+        self.info_publisher = create_publisher(
+            self._params, CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
 
     def _configure_camera(self):
         """Open and negotiate the camera, with the controls set; ConfigError if it fails."""
@@ -213,11 +217,16 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         """Declare the open camera's controls as parameters (once; the loop keeps the values)."""
         if self.controls is not None:  # configured again after a cleanup
             return
-        controls = ControlParameters(self._params, self.capture.set_control,
-                                     self.capture.controls, self.get_logger(), self.video_device)
+        controls = ControlParameters(self._params, self.capture, self.get_logger(),
+                                     self.video_device)
         controls.declare(set(self.values))  # ConfigError: a mistyped value, declared nothing
         self.controls = controls
         self.create_timer(CONTROL_SYNC_PERIOD_S, self.controls.sync)
+
+    def _controls_refused(self, refusals):
+        """Say which controls a reopened camera did not take again (the capture loop's)."""
+        if self.controls is not None:
+            self.controls.warn(refusals)
 
     def _load_calibration(self):
         """Load the calibration; serve set_camera_info."""

@@ -27,11 +27,11 @@ import numpy as np
 from py_vision import dds
 from py_vision.cv_bridge import CvBridge, CvBridgeError, cvtColorForDisplay
 from py_vision.diagnostics import Diagnostics, OK, Recent, Status, WARN
-from py_vision.display import Display, DISPLAYS
 from py_vision.node_main import main_for
 from py_vision.params import Parameters, Spec, viewer_specs
 from py_vision.stats import stamp_age_s, StreamStats
 from py_vision.transport import jpeg_size, subscribe, TRANSPORTS
+from py_vision.viewer.display import Display, DISPLAYS
 from rclpy.node import Node
 
 DEPTH_ENCODINGS = ('16UC1', '16SC1')
@@ -76,7 +76,7 @@ class VideoSubscriber(Node):
         self.display.attach(self, self.stats, self.subscription_.topic_name,
                             camera_topic=self.subscription_.topic_name)
         self._recent = Recent()
-        self.diagnostics = Diagnostics(self, hardware_id=self.subscription_.topic_name)
+        self.diagnostics = Diagnostics(params, hardware_id=self.subscription_.topic_name)
         self.diagnostics.add('stream', self.stream_status)
 
     def _set_stats_period(self, period):

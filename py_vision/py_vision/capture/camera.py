@@ -17,22 +17,22 @@
 A camera as usbcam_publisher sees it, without ROS: open with a pixel format, read, control.
 
 `Camera.open()` opens what `video_device` names (`open_source`), negotiates the pixel format
-the camera sends (`pixel_format`: a FourCC or usb_cam name of the table in pixel_formats, or
+the camera sends (`pixel_format`: a FourCC of the table in pixel_formats, or
 `auto`: the format that reaches the requested size and rate with the least work for the
 output asked for), and says what it really got: size, rate, format, and any request the camera
 refused. Frames are the camera's bytes as sent (`Frame`); a camera's JPEG is checked for being
 whole without decoding it, and decoded only when someone needs its pixels. `start()` and
 `stop()` start and stop the stream, the device kept open in between. Controls are the device's
-own (`ControlInfo`), addressed by parameter name or by one of usb_cam's names, and checked
-against what the device reports before they reach it.
+own (`ControlInfo`), addressed by V4L2 id, and checked against what the device reports before
+they reach it.
 """
 
 import os
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Mapping, Optional, Tuple
 
 import cv2
 import numpy as np
-from py_vision.capture.controls import ControlInfo, OWNED_BY, USB_CAM_ALIASES
+from py_vision.capture.controls import check, ControlInfo, governed, Refusal
 from py_vision.capture.devices import CAMERA, classify, FILE
 from py_vision.capture.opencv_env import prepare_opencv
 from py_vision.capture.pixel_formats import COLOUR_OUTPUTS, find, FORMATS, PixelFormat
@@ -50,7 +50,7 @@ _RATE_TOLERANCE = 0.02
 
 
 def pixel_format_accepted(value: str) -> bool:
-    """Return True for a pixel_format value: auto, or a FourCC or usb_cam name of the table."""
+    """Return True for a pixel_format value: auto, or a FourCC of the table."""
     return str(value).strip().lower() == 'auto' or find(value) is not None
 
 
@@ -234,51 +234,23 @@ class Camera:
         return self.source.formats()
 
     def controls(self) -> List[ControlInfo]:
-        """Return the device's controls with their current values, and why inactive ones are."""
-        found = self.source.controls()
-        by_id = {control.cid: control for control in found}
-        for position, control in enumerate(found):
-            if control.inactive and not control.inactive_reason and control.cid in OWNED_BY:
-                owner = by_id.get(OWNED_BY[control.cid][0])
-                if owner is not None:
-                    found[position] = control.with_value(
-                        control.value, inactive_reason='%s is %s' % (owner.name, owner.value))
-        return found
+        """Return the device's controls with their values, and what holds the inactive ones."""
+        return governed(self.source.controls())
 
-    def control(self, name: str) -> Optional[ControlInfo]:
-        """Return the control a parameter name (or usb_cam name) means, or None."""
-        controls = {control.name: control for control in self.controls()}
-        if name in controls:
-            return controls[name]
-        alias = USB_CAM_ALIASES.get(name)
-        if alias is not None:
-            return next((c for c in controls.values() if c.cid == alias.cid), None)
-        return None
-
-    def set_control(self, name: str, value) -> Optional[str]:
+    def set_controls(self, values: Mapping[int, int]) -> Dict[int, Refusal]:
         """
-        Set a control by parameter name or usb_cam name; return None, or why not in words.
+        Set controls (V4L2 id -> value; a button: pressed); return why some were not set.
 
-        A usb_cam switch (autoexposure, auto_white_balance, autofocus) takes a boolean. The
-        value is checked against what the device reports (read-only, inactive, range, step,
-        menu) before it reaches the device.
+        Automatic modes are set first, so that the controls they free take the values asked
+        for (controls.check); what the device reports refusing (read-only, inactive, out of
+        its range, step or menu) never reaches it.
         """
-        control = self.control(name)
-        if control is None:
-            return '%s has no %s control' % (self.device, name)
-        alias = USB_CAM_ALIASES.get(name) if name != control.name else None
-        raw = alias.to_device(value, control) if alias is not None else int(value)
-        reason = control.refusal(raw)
-        if reason is not None:
-            return reason if alias is None else reason.replace(control.name, name, 1)
-        refused = self.source.set_control(control.cid, raw)
-        if refused:
-            return '%s refused %s=%s: %s' % (self.device, name, value, refused)
-        return None
-
-    def values(self) -> Dict[str, object]:
-        """Return every control's current value by parameter name."""
-        return {control.name: control.value for control in self.controls()}
+        ordered, refused = check(self.controls(), values)
+        for cid, value in ordered:
+            reason = self.source.set_control(cid, value)
+            if reason:
+                refused[cid] = Refusal(cid, ': %s refused %s (%s)' % (self.device, value, reason))
+        return refused
 
     def interrupt(self) -> None:
         """End a read() waiting in another thread."""

@@ -32,6 +32,7 @@ from py_vision.capture.pixel_formats import find
 from py_vision.capture.source import FrameFormat, SourceError
 from py_vision.capture.synthetic_device import SyntheticDevices
 from py_vision.capture.v4l2 import V4L2Device, V4L2Error
+from py_vision.control_names import param_name
 
 __all__ = ['device_listing']
 
@@ -68,7 +69,7 @@ def _control_lines(controls: List[ControlInfo]) -> List[str]:
     if not controls:
         return ['controls: none']
     return ['controls (parameters of usbcam_publisher):'] + [
-        '  ' + control.summary() for control in controls]
+        '  %s %s' % (param_name(control.label), control.summary()) for control in controls]
 
 
 def device_listing(video_device: str) -> str:

@@ -41,10 +41,10 @@ counters diagnostics report.
 
 from dataclasses import dataclass, replace
 import threading
-from typing import Callable, Dict, List, Optional, Sequence
+from typing import Callable, Dict, List, Mapping, Optional, Sequence
 
 from py_vision.capture.camera import Camera
-from py_vision.capture.controls import ControlInfo, OWNED_BY
+from py_vision.capture.controls import ControlInfo, Refusal
 from py_vision.capture.frame_memory import keep_frame_buffers
 from py_vision.capture.source import Clock, Frame, MONOTONIC, SourceError
 
@@ -91,13 +91,16 @@ class CaptureLoop:
     `open_camera()` returns an opened Camera or raises SourceError; `on_frame(camera, frame)`
     publishes a frame (on the capture thread); `logger` has info/warning/error. `clock` and
     `timing` are for tests. `on_failure(error)` is called when the capture thread fails with
-    an unexpected error (on_frame raised): the loop then stops reading.
+    an unexpected error (on_frame raised): the loop then stops reading. `on_refused(refusals)`
+    hears which controls a reopened camera did not take again (V4L2 id -> Refusal); without it
+    they are logged by id.
     """
 
     def __init__(self, open_camera: Callable[[], Camera],
                  on_frame: Callable[[Camera, Frame], None], logger, *, name: str = 'camera',
                  clock: Clock = MONOTONIC, timing: LoopTiming = LoopTiming(),
-                 on_failure: Optional[Callable[[Exception], None]] = None):
+                 on_failure: Optional[Callable[[Exception], None]] = None,
+                 on_refused: Optional[Callable[[Dict[int, Refusal]], None]] = None):
         self._open_camera = open_camera
         self._on_frame = on_frame
         self._log = logger
@@ -105,9 +108,10 @@ class CaptureLoop:
         self._clock = clock
         self._timing = timing
         self._on_failure = on_failure
+        self._on_refused = on_refused or self._log_refused
         self._lock = threading.Lock()      # guards camera and wanted controls
         self._camera: Optional[Camera] = None
-        self._wanted: Dict[str, object] = {}
+        self._wanted: Dict[int, int] = {}  # V4L2 id -> value, applied at every (re)open
         self._thread: Optional[threading.Thread] = None
         self._stop = threading.Event()
         # Counted per frame in plain attributes; stats() makes the snapshot.
@@ -194,29 +198,23 @@ class CaptureLoop:
             self._update(present=False)
         return ended
 
-    def set_control(self, name: str, value) -> Optional[str]:
+    def set_controls(self, values: Mapping[int, int], keep: bool = True) -> Dict[int, Refusal]:
         """
-        Set a control by parameter name or usb_cam name; None when done, else why not.
+        Set controls (V4L2 id -> value) on the camera; return those it refused and why.
 
-        While the device is lost the value is kept and applied when it is back; it is
-        applied again after every reconnect.
+        The others are kept (unless keep is False: a button's press) and applied again after
+        every reconnect; while the device is lost they are only kept, and applied once it is
+        back. A refused value is not kept.
         """
         with self._lock:
             camera = self._camera
-            if camera is not None:
-                reason = camera.set_control(name, value)
-                if reason:
-                    return reason
-                # The newest value of a control wins, whichever name it was set by.
-                cid = camera.control(name).cid
-                for other in list(self._wanted):
-                    control = camera.control(other)
-                    if control is not None and control.cid == cid:
-                        del self._wanted[other]
-            self._wanted[name] = value
-        return None
+            refused = camera.set_controls(values) if camera is not None else {}
+            if keep:
+                self._wanted.update((cid, value) for cid, value in values.items()
+                                    if cid not in refused)
+        return refused
 
-    def wanted_controls(self) -> Dict[str, object]:
+    def wanted_controls(self) -> Dict[int, int]:
         """Return the controls set through the loop (applied again at each reopen)."""
         return dict(self._wanted)
 
@@ -245,19 +243,18 @@ class CaptureLoop:
         if camera is None:
             self._update(present=False)
             return
-        owners = {owner for owner, _ in OWNED_BY.values()}
-
-        def owner_first(item):
-            control = camera.control(item[0])
-            return 0 if control is not None and control.cid in owners else 1
-        for name, value in sorted(self._wanted.items(), key=owner_first):
-            reason = camera.set_control(name, value)
-            if reason:
-                self._log.warning("%s; left at the camera's own value" % reason)
+        refused = camera.set_controls(self._wanted)
+        if refused:
+            self._on_refused(refused)
         keep_frame_buffers(camera.width, camera.height)
         self._update(present=True, pixel_format='file' if camera.file else
                      camera.pixel_format.fourcc, width=camera.width, height=camera.height,
                      fps=camera.fps)
+
+    def _log_refused(self, refusals: Dict[int, Refusal]) -> None:
+        for refusal in refusals.values():
+            self._log.warning("%s; left at the camera's own value"
+                              % refusal.words(lambda cid: 'control 0x%08x' % cid))
 
     def _update(self, **changes) -> None:
         self._stats = replace(self._stats, **changes)

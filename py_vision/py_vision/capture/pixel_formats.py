@@ -17,7 +17,7 @@
 The pixel formats py_vision knows: one table that the whole camera layer reads.
 
 Each `PixelFormat` says once: its V4L2 FourCC (what `--list-formats` prints and
-`pixel_format` takes, case-insensitive), the names usb_cam gives it, what it is, the
+`pixel_format` takes, case-insensitive; usb_cam's names are control_names'), what it is, the
 sensor_msgs encoding of its pixels as sent (None where image_encodings has none: Humble's and
 Jazzy's define mono8, mono16, rgb8, bgr8, the 8-bit Bayer patterns, yuv422 for UYVY,
 yuv422_yuy2 for YUYV, nv21 and nv24), whether it is compressed, how its bytes lie in a buffer
@@ -25,7 +25,7 @@ yuv422_yuy2 for YUYV, nv21 and nv24), whether it is compressed, how its bytes li
 it converts to bgr8, rgb8, mono8 and mono16 (OpenCV on a view of the buffer, with what that
 costs). Negotiation (`auto`), listing, diagnostics, the frames, the synthetic camera and the
 emulated test cameras all read it; `from_yuyv` is how the test cameras make a format from their
-YUYV picture. A new format is one entry in `_TABLE`.
+YUYV picture. A new format is one entry in `_table()`.
 """
 
 from dataclasses import dataclass
@@ -78,7 +78,6 @@ class PixelFormat:
     dtype: str = 'uint8'               # of the view's elements (little-endian, as V4L2's)
     bits: int = 8                      # significant bits of a sample
     mono: bool = False
-    names: Tuple[str, ...] = ()        # usb_cam's names for it
     from_yuyv: Optional[Callable[[np.ndarray], np.ndarray]] = None
 
     @property
@@ -358,9 +357,9 @@ def _table():
     shift16, shift10 = (VIEW, _same), (CHEAP, lambda view: view << 6)
     formats = [
         PixelFormat('YUYV', 'YUYV 4:2:2', 'yuv422_yuy2', _yuv('YUYV'), _PACKED_422, 2,
-                    names=('yuyv',), from_yuyv=_packed_422(('Y0', 'U', 'Y1', 'V'))),
+                    from_yuyv=_packed_422(('Y0', 'U', 'Y1', 'V'))),
         PixelFormat('UYVY', 'UYVY 4:2:2', 'yuv422', _yuv('UYVY'), _PACKED_422, 2,
-                    names=('uyvy',), from_yuyv=_packed_422(('U', 'Y0', 'V', 'Y1'))),
+                    from_yuyv=_packed_422(('U', 'Y0', 'V', 'Y1'))),
         PixelFormat('YVYU', 'YVYU 4:2:2', None, _yuv('YVYU'), _PACKED_422, 2,
                     from_yuyv=_packed_422(('Y0', 'V', 'Y1', 'U'))),
         PixelFormat('NV12', 'Y/UV 4:2:0', None, _yuv('NV12'), _PLANAR_420,
@@ -374,14 +373,13 @@ def _table():
         PixelFormat('NV24', 'Y/UV 4:4:4', 'nv24', _nv24(), (Plane(1), Plane(2)),
                     from_yuyv=_nv24_from),
         PixelFormat('RGB3', '24-bit RGB 8-8-8', 'rgb8', _rgb('RGB'), (Plane(3),), 3,
-                    names=('rgb24',), from_yuyv=_colour('RGB')),
+                    from_yuyv=_colour('RGB')),
         PixelFormat('BGR3', '24-bit BGR 8-8-8', 'bgr8', _rgb('BGR'), (Plane(3),), 3,
-                    names=('bgr24',), from_yuyv=_colour('BGR')),
+                    from_yuyv=_colour('BGR')),
         PixelFormat('GREY', '8-bit Greyscale', 'mono8', _grey((VIEW, _same), (CHEAP, _widen)),
-                    _ONE, mono=True, names=('mono8',), from_yuyv=_luma),
+                    _ONE, mono=True, from_yuyv=_luma),
         PixelFormat('Y16', '16-bit Greyscale', 'mono16', _grey((CHEAP, _narrow), shift16),
-                    _TWO, dtype='uint16', bits=16, mono=True, names=('mono16',),
-                    from_yuyv=_deep(8)),
+                    _TWO, dtype='uint16', bits=16, mono=True, from_yuyv=_deep(8)),
         PixelFormat('Y10', '10-bit Greyscale', None,
                     _grey((CHEAP, lambda view: (view >> 2).astype(np.uint8)), shift10),
                     _TWO, dtype='uint16', bits=10, mono=True, from_yuyv=_deep(2)),
@@ -391,9 +389,8 @@ def _table():
         formats.append(PixelFormat(
             fourcc, '8-bit Bayer %s' % pattern, 'bayer_%s8' % pattern.lower(),
             _bayer(opencv_name), _ONE, from_yuyv=_mosaic(pattern)))
-    for fourcc, description, names in (('MJPG', 'Motion-JPEG', ('mjpeg',)),
-                                       ('JPEG', 'JFIF JPEG', ())):
-        formats.append(PixelFormat(fourcc, description, None, _jpeg(), names=names))
+    for fourcc, description in (('MJPG', 'Motion-JPEG'), ('JPEG', 'JFIF JPEG')):
+        formats.append(PixelFormat(fourcc, description, None, _jpeg()))
     return {pixel_format.fourcc: pixel_format for pixel_format in formats}
 
 
@@ -404,18 +401,14 @@ UVC_WEBCAM = ('YUYV', 'MJPG')
 FORMATS: Dict[str, PixelFormat] = _table()
 # The layout of OpenCV's own images (what a video file gives).
 OPENCV_BGR = FORMATS['BGR3']
-_BY_NAME = {name: pixel_format for pixel_format in FORMATS.values()
-            for name in (pixel_format.fourcc.lower(),) + pixel_format.names}
+_BY_NAME = {pixel_format.fourcc.lower(): pixel_format for pixel_format in FORMATS.values()}
 
 
 def names_accepted() -> str:
-    """Return, in words, the names `pixel_format` takes besides auto."""
-    aliases = [name for pixel_format in FORMATS.values() for name in pixel_format.names
-               if name != pixel_format.fourcc.lower()]
-    return "%s (case-insensitive), or usb_cam's %s" % (
-        ', '.join(fourcc.lower() for fourcc in FORMATS), ', '.join(aliases))
+    """Return, in words, the FourCCs a `pixel_format` may name."""
+    return '%s (case-insensitive)' % ', '.join(fourcc.lower() for fourcc in FORMATS)
 
 
 def find(name: str) -> Optional[PixelFormat]:
-    """Return the format a FourCC or a usb_cam name means (case-insensitive), or None."""
+    """Return the format a FourCC names (case-insensitive: 'yuyv', 'Y16'), or None."""
     return _BY_NAME.get(str(name).strip().lower())

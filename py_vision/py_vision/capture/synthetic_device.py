@@ -43,7 +43,7 @@ Faults for tests, as constructor options or in a ``video_device`` string
 (`SyntheticDevices.open`): ``fail_open`` (never opens), ``stop_after`` (unplugged after N
 frames), ``unplugged_for`` (reopening works again that many seconds after the unplug) and
 ``fail_every`` (every K-th read fails while the device stays open); ``formats`` says what
-the camera offers, by FourCC or usb_cam name (``synthetic?formats=grey`` or ``yuyv,mjpeg``).
+the camera offers, by FourCC (``synthetic?formats=grey`` or ``yuyv,mjpg``).
 Cameras opened through one `SyntheticDevices` with the same name and options share one state:
 the frame index and an unplug carry over to the next camera opened with them. The devices'
 clock is a constructor argument (a fake one in tests).
@@ -57,7 +57,7 @@ from urllib.parse import parse_qsl
 import cv2
 import numpy as np
 from py_vision.capture.controls import (
-    BOOL, CID, ControlInfo, EXPOSURE_APERTURE_PRIORITY, EXPOSURE_MANUAL, INT, MENU, OWNED_BY)
+    BOOL, CID, ControlInfo, EXPOSURE_APERTURE_PRIORITY, EXPOSURE_MANUAL, holder, INT, MENU)
 from py_vision.capture.pacing import FramePacer
 from py_vision.capture.pixel_formats import find, FORMATS, PixelFormat, UVC_WEBCAM
 from py_vision.capture.source import (
@@ -102,7 +102,6 @@ _PROPS = {
     cv2.CAP_PROP_FOCUS: CID.FOCUS_ABSOLUTE, cv2.CAP_PROP_AUTOFOCUS: CID.FOCUS_AUTO,
 }
 _DEFAULTS = {control.cid: control.default for control in CONTROLS}
-_NEUTRAL = {control.name: control.default for control in CONTROLS}
 
 
 def bus_max_fps(pixel_format: PixelFormat, width: int, height: int) -> float:
@@ -181,7 +180,7 @@ class SyntheticCamera:
     `last_capture_time` the time.monotonic() at which it was captured (its due time; earlier
     than the read's return when the caller was late). `error` says why the device is not
     open, or why its reads fail, or is None. `formats` names the pixel formats it offers (by
-    FourCC or usb_cam name); it opens in the first of them.
+    FourCC); it opens in the first of them.
     """
 
     def __init__(self, width=640, height=480, fps=10.0, *, fail_open=False, stop_after=None,
@@ -320,8 +319,7 @@ class SyntheticCamera:
         """Return the grabbed frame's bytes as the camera sends them in its format (1-D)."""
         if self._rendered != self._grabbed:
             self._render(self._grabbed)
-        yuyv = apply_controls(self._buf, {_CONTROL_OF[cid].name: value for cid, value
-                                          in self._controls.items()}, _NEUTRAL)
+        yuyv = apply_controls(self._buf, self._controls, _DEFAULTS)
         pixel_format = self._format
         if pixel_format.compressed:
             encoder = mjpeg_encoder(self._width, self._height)
@@ -395,15 +393,10 @@ class SyntheticCamera:
         return found
 
     def controls(self) -> List[ControlInfo]:
-        """Return the camera's controls with their values; owned ones inactive in auto mode."""
-        found = []
-        for control in CONTROLS:
-            inactive = False
-            if control.cid in OWNED_BY:
-                owner, freeing = OWNED_BY[control.cid]
-                inactive = self._controls[owner] not in freeing
-            found.append(control.with_value(self._controls[control.cid], inactive))
-        return found
+        """Return the camera's controls with their values; held ones inactive in auto mode."""
+        return [control.with_value(self._controls[control.cid],
+                                   holder(control.cid, self._controls) is not None)
+                for control in CONTROLS]
 
     def set_control(self, cid: int, value: int) -> Optional[str]:
         """Set a control as a driver does; return why it was refused, or None."""

@@ -200,7 +200,7 @@ def test_a_camera_that_cannot_be_used_is_one_line_and_status_1(
 # any rate): the synthetic model must negotiate them as the emulated USB 2.0 webcam does.
 AGREEMENT = [(640, 480, 30.0, 'auto'), (1280, 720, 30.0, 'auto'), (1920, 1080, 15.0, 'auto'),
              (1280, 720, 30.0, 'yuyv'), (1920, 1080, 30.0, 'yuyv'), (800, 600, 30.0, 'yuyv'),
-             (320, 240, 25.0, 'mjpeg'), (1280, 720, 10.0, 'auto'), (160, 120, 5.0, 'auto')]
+             (320, 240, 25.0, 'mjpg'), (1280, 720, 10.0, 'auto'), (160, 120, 5.0, 'auto')]
 NEGOTIATE = """
 import json, sys
 from py_vision.capture import Camera

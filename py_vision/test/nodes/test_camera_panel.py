@@ -264,7 +264,7 @@ def descriptor(name, **fields):
 
 
 def test_controls_are_read_from_descriptors_as_the_contract_writes_them():
-    from py_vision.camera_panel import Control, parse_menu
+    from py_vision.viewer.camera_panel import Control, parse_menu
     from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterValue
 
     exposure = Control.from_descriptor(descriptor(
@@ -332,8 +332,8 @@ def test_controls_are_read_from_descriptors_as_the_contract_writes_them():
 
 
 def test_a_value_of_the_wrong_type_is_refused_before_it_reaches_the_node():
-    from py_vision.camera_panel import Control
-    from py_vision.web_viewer import CameraError
+    from py_vision.viewer.camera_panel import Control
+    from py_vision.viewer.camera_access import CameraError
     from rcl_interfaces.msg import ParameterValue
     import pytest
 
@@ -469,7 +469,7 @@ def test_parameters_changing_under_the_read_are_read_again_not_taken_for_no_cont
 
 def test_a_call_on_its_way_when_the_node_leaves_fails_at_once_with_the_reason():
     from concurrent.futures import Future
-    from py_vision.camera_panel import _Calls
+    from py_vision.viewer.camera_panel import _Calls
 
     class Client:
         def __init__(self):
@@ -562,7 +562,7 @@ def node_info(name, namespace='/'):
 def test_a_publisher_whose_node_name_is_not_discovered_yet_is_not_taken_for_the_camera():
     # The graph can list a publisher before the name of its node has arrived: it is then
     # '_NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_' for a moment, not a camera to ask.
-    from py_vision.camera_panel import CameraPanel
+    from py_vision.viewer.camera_panel import CameraPanel
     node = GraphNode()
     panel = CameraPanel(node, '/usb_camera/image')
     node.infos = [node_info('_NODE_NAME_UNKNOWN_', '_NODE_NAMESPACE_UNKNOWN_')]
@@ -579,7 +579,7 @@ def test_a_node_answering_short_again_and_again_is_read_at_the_reload_period():
     # Three reads answered short are made again at the next refreshes; after that the node is
     # read at the reload period only, not every second for ever.
     from types import SimpleNamespace
-    from py_vision.camera_panel import CameraPanel, RELOAD_PERIOD_S, SHORT_READS_RETRIED
+    from py_vision.viewer.camera_panel import CameraPanel, RELOAD_PERIOD_S, SHORT_READS_RETRIED
     node = GraphNode()
     node.infos = [node_info('usbcam_publisher')]
     node.answers = {
@@ -603,8 +603,8 @@ def test_a_node_answering_short_again_and_again_is_read_at_the_reload_period():
 def test_a_set_answered_with_the_wrong_number_of_results_is_a_502():
     from rcl_interfaces.msg import IntegerRange, ParameterDescriptor, ParameterValue
     from types import SimpleNamespace
-    from py_vision.camera_panel import CameraPanel
-    from py_vision.web_viewer import CameraError
+    from py_vision.viewer.camera_panel import CameraPanel
+    from py_vision.viewer.camera_access import CameraError
     import pytest
     node = GraphNode()
     node.infos = [node_info('usbcam_publisher')]

@@ -30,10 +30,13 @@ import xml.etree.ElementTree as ET
 import ros_harness
 
 PACKAGE_DIR = Path(__file__).resolve().parents[2]
-# The copyright linter's tests, and a test that starts a node and reads its parameters through
-# a peer: these must be among the tests that ran.
-SELECTED = {'test_copyright', 'test_a_node_runs_with_exactly_the_values_of_its_params_file'}
-SELECTION = 'test_copyright or (test_a_node_runs_with_exactly and cv_bridge_test)'
+# The copyright linter's tests, a test that starts a node and reads its parameters through a
+# peer, and one that needs the viewer's page files installed beside its modules: these must be
+# among the tests that ran.
+SELECTED = {'test_copyright', 'test_a_node_runs_with_exactly_the_values_of_its_params_file',
+            'test_page_is_self_contained_with_the_video_and_stats_elements'}
+SELECTION = ('test_copyright or (test_a_node_runs_with_exactly and cv_bridge_test) or '
+             'test_page_is_self_contained')
 STEP_TIMEOUT_S = 300
 
 

@@ -17,12 +17,14 @@
 import cv2
 import numpy as np
 from py_vision.capture import Camera as _Camera, SourceError, StreamFormat, SyntheticDevices
+from py_vision.capture.controls import CID
 from py_vision.capture.pixel_formats import find, FORMATS
 from py_vision.capture.source import Frame
 from py_vision.capture.synthetic_device import SyntheticCamera
 from py_vision.capture.synthetic_picture import (
     JPEG_QUALITY, read_frame_index, synthetic_frame, synthetic_jpeg, synthetic_yuyv)
 from py_vision.capture.v4l2 import V4L2Device, V4L2Error
+from py_vision.control_names import ControlNames, param_name
 import pytest
 
 
@@ -75,11 +77,11 @@ def test_yuyv_is_limited_by_the_bus_and_says_so(width, height, rate):
 
 
 def test_a_format_the_camera_refuses_is_one_note_naming_what_it_gives():
-    camera = Camera.open('synthetic?formats=yuyv', 640, 480, 30.0, 'mjpeg')
+    camera = Camera.open('synthetic?formats=yuyv', 640, 480, 30.0, 'mjpg')
     assert camera.pixel_format.fourcc == 'YUYV'
     assert camera.notes == [
-        'the camera refuses pixel_format mjpeg (it offers YUYV); it gives YUYV instead']
-    camera = Camera.open('synthetic?formats=mjpeg', 640, 480, 30.0, 'yuyv')
+        'the camera refuses pixel_format mjpg (it offers YUYV); it gives YUYV instead']
+    camera = Camera.open('synthetic?formats=mjpg', 640, 480, 30.0, 'yuyv')
     assert camera.pixel_format.fourcc == 'MJPG'
 
 
@@ -113,7 +115,7 @@ def test_auto_prefers_a_format_that_reaches_the_rate_over_less_work():
 
 
 def test_mjpeg_frames_are_the_cameras_jpeg_and_decode_only_on_demand():
-    camera = Camera.open('synthetic', 1280, 720, 30.0, 'mjpeg')
+    camera = Camera.open('synthetic', 1280, 720, 30.0, 'mjpg')
     frame = camera.read()
     assert frame.jpeg is not None and frame.jpeg.ndim == 1
     assert bytes(frame.jpeg[:2]) == b'\xff\xd8'
@@ -219,32 +221,40 @@ def mean_bgr(camera):
     return camera.read().bgr().reshape(-1, 3).mean(axis=0)
 
 
-@pytest.mark.parametrize('fmt', ['yuyv', 'mjpeg'])
+def value(camera, cid):
+    """Return a control's value as the camera reports it now."""
+    return next(control.value for control in camera.controls() if control.cid == cid)
+
+
+def refusal(camera, cid, value):
+    """Set one control; return the camera's refusal in words (None: set)."""
+    refused = camera.set_controls({cid: value})
+    return ControlNames(camera.controls()).words(refused[cid]) if refused else None
+
+
+@pytest.mark.parametrize('fmt', ['yuyv', 'mjpg'])
 def test_controls_change_the_picture_in_the_expected_direction(fmt):
     camera = Camera.open('synthetic', 320, 240, 30.0, fmt)
     base = mean_bgr(camera)
-    assert camera.set_control('brightness', 40) is None
-    assert camera.values()['brightness'] == 40
+    assert camera.set_controls({CID.BRIGHTNESS: 40}) == {}
+    assert value(camera, CID.BRIGHTNESS) == 40
     assert mean_bgr(camera).mean() > base.mean() + 20
-    camera.set_control('brightness', 0)
-    camera.set_control('autoexposure', False)
-    assert camera.set_control('exposure', 400) is None
+    # Manual exposure and the exposure time in one batch: the mode goes first.
+    assert camera.set_controls({CID.BRIGHTNESS: 0, CID.EXPOSURE_ABSOLUTE: 400,
+                                CID.EXPOSURE_AUTO: 1}) == {}
     assert mean_bgr(camera).mean() > base.mean() + 10
-    camera.set_control('exposure', 166)
-    camera.set_control('auto_white_balance', False)
-    camera.set_control('white_balance', 2800)  # a low temperature: bluer
+    camera.set_controls({CID.EXPOSURE_ABSOLUTE: 166, CID.WHITE_BALANCE_TEMPERATURE: 2800,
+                         CID.AUTO_WHITE_BALANCE: 0})   # a low temperature: bluer
     b, g, r = mean_bgr(camera)
     assert b - r > (base[0] - base[2]) + 10
-    camera.set_control('auto_white_balance', True)
+    camera.set_controls({CID.AUTO_WHITE_BALANCE: 1})
 
     def luma_spread():
         return cv2.cvtColor(camera.read().bgr(), cv2.COLOR_BGR2GRAY).astype(float).std()
     contrast_base = luma_spread()
-    camera.set_control('contrast', 8)
+    camera.set_controls({CID.CONTRAST: 8})
     assert luma_spread() < contrast_base * 0.5
-    camera.set_control('contrast', 32)
-    camera.set_control('autofocus', False)
-    camera.set_control('focus', 200)
+    camera.set_controls({CID.CONTRAST: 32, CID.FOCUS_AUTO: 0, CID.FOCUS_ABSOLUTE: 200})
 
     def edge_energy(image):
         luma = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY).astype(float)
@@ -255,33 +265,31 @@ def test_controls_change_the_picture_in_the_expected_direction(fmt):
 
 def test_controls_are_the_devices_own_and_checked_against_its_ranges():
     camera = Camera.open('synthetic', 320, 240, 30.0, 'yuyv')
-    assert {control.name for control in camera.controls()} == {
+    assert {param_name(control.label) for control in camera.controls()} == {
         'brightness', 'contrast', 'saturation', 'sharpness', 'gain', 'white_balance_automatic',
         'white_balance_temperature', 'auto_exposure', 'exposure_time_absolute',
         'focus_automatic_continuous', 'focus_absolute'}
-    assert camera.set_control('brightness', 200) == \
+    assert refusal(camera, CID.BRIGHTNESS, 200) == \
         "brightness: 200 is out of the camera's range -64..64"
     assert camera.source.get(cv2.CAP_PROP_BRIGHTNESS) == 0
-    # usb_cam's switch is a boolean; the device's menu says manual mode is 1.
-    assert camera.set_control('autoexposure', False) is None
-    assert camera.values()['auto_exposure'] == 1
+    assert refusal(camera, CID.EXPOSURE_AUTO, 1) is None
     assert camera.source.get(cv2.CAP_PROP_AUTO_EXPOSURE) == 1
-    assert camera.set_control('auto_exposure', 2) == \
+    assert refusal(camera, CID.EXPOSURE_AUTO, 2) == \
         'auto_exposure: 2 is not one of its menu entries (1=Manual Mode; ' \
         '3=Aperture Priority Mode)'
+    assert refusal(camera, 0x00980999, 1) == 'control 0x00980999: the camera has no such control'
 
 
-def test_a_control_an_automatic_mode_owns_is_refused_with_the_reason():
+def test_a_control_an_automatic_mode_holds_is_refused_naming_the_mode():
     camera = Camera.open('synthetic', 320, 240, 30.0, 'yuyv')
-    exposure = camera.control('exposure_time_absolute')
-    assert exposure.inactive and exposure.inactive_reason == 'auto_exposure is 3'
-    assert camera.set_control('exposure_time_absolute', 300) == \
+    exposure = next(c for c in camera.controls() if c.cid == CID.EXPOSURE_ABSOLUTE)
+    assert exposure.inactive and exposure.governor == CID.EXPOSURE_AUTO
+    assert refusal(camera, CID.EXPOSURE_ABSOLUTE, 300) == \
         'exposure_time_absolute is inactive while auto_exposure is 3'
-    assert camera.set_control('exposure', 300) == \
-        'exposure is inactive while auto_exposure is 3'
-    assert camera.set_control('auto_exposure', 1) is None
-    assert camera.set_control('exposure', 300) is None
-    assert camera.values()['exposure_time_absolute'] == 300
+    assert value(camera, CID.EXPOSURE_ABSOLUTE) == 166   # nothing reached the device
+    assert refusal(camera, CID.EXPOSURE_AUTO, 1) is None
+    assert refusal(camera, CID.EXPOSURE_ABSOLUTE, 300) is None
+    assert value(camera, CID.EXPOSURE_ABSOLUTE) == 300
 
 
 def test_a_file_has_no_controls_and_says_which(tmp_path):
@@ -290,11 +298,11 @@ def test_a_file_has_no_controls_and_says_which(tmp_path):
     for _ in range(3):
         writer.write(np.zeros((48, 64, 3), np.uint8))
     writer.release()
-    camera = Camera.open(path, 640, 480, 10.0, 'mjpeg')
+    camera = Camera.open(path, 640, 480, 10.0, 'mjpg')
     assert camera.file and camera.controls() == []
     assert camera.describe() == "64x48 video file at 10 fps (the file's own size; 640x480 " \
         'requested)'
-    assert camera.set_control('gain', 3) == '%s has no gain control' % path
+    assert refusal(camera, CID.GAIN, 3) == 'control 0x00980913: the camera has no such control'
 
 
 def test_a_missing_device_is_a_source_error():

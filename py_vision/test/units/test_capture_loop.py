@@ -19,7 +19,9 @@ import threading
 import time
 
 from py_vision.capture import Camera, CaptureLoop, LoopTiming, SourceError, SyntheticDevices
+from py_vision.capture.controls import CID
 from py_vision.capture.source import Frame
+from py_vision.control_names import ControlNames
 from ros_harness import wait_until
 
 FAST = LoopTiming(backoff_s=(0.01,), stall_periods=3, min_stall_s=0.2, first_frame_s=0.5)
@@ -59,7 +61,7 @@ class Device:
     def open(self):  # noqa: A003
         if not self.present.is_set():
             raise SourceError('cannot open video_device "test": unplugged')
-        camera = Camera.open('synthetic', 160, 120, self.fps, 'mjpeg', synthetic=self.devices)
+        camera = Camera.open('synthetic', 160, 120, self.fps, 'mjpg', synthetic=self.devices)
         self.opened += 1
         device, read, start, stop = self, camera.read, camera.start, camera.stop
 
@@ -90,6 +92,10 @@ class Device:
         return camera
 
 
+def value(camera, cid):
+    return next(control.value for control in camera.controls() if control.cid == cid)
+
+
 def run_loop(device, timing=FAST):
     frames, log = [], Log()
     loop = CaptureLoop(device.open, lambda camera, frame: frames.append(frame), log,
@@ -117,14 +123,14 @@ def test_an_unplug_is_a_loss_the_device_is_reopened_and_controls_applied_again()
     loop, frames, log = run_loop(device)
     loop.start()
     try:
-        assert loop.set_control('brightness', 20) is None
+        assert loop.set_controls({CID.BRIGHTNESS: 20}) == {}
         wait_until(lambda: frames, 10, what='frames')
         device.present.clear()
         wait_until(lambda: loop.stats().lost == 1, 10, what='the loss')
         assert any('lost test after 5 failed reads' in line for line in log.lines)
         device.present.set()
         wait_until(lambda: loop.stats().reconnects == 1, 10, what='the reconnect')
-        assert loop.camera.values()['brightness'] == 20
+        assert value(loop.camera, CID.BRIGHTNESS) == 20
         count = len(frames)
         wait_until(lambda: len(frames) > count, 10, what='frames after the reconnect')
     finally:
@@ -213,7 +219,7 @@ def test_pause_keeps_the_device_and_resume_drops_what_was_captured_before():
     assert loop.pause()
     assert loop.camera is camera and loop.stats().present and not loop.stats().streaming
     assert device.streaming == ['start', 'stop']   # the stream stopped, the device kept
-    assert loop.set_control('contrast', 10) is None
+    assert loop.set_controls({CID.CONTRAST: 10}) == {}
     paused_at = device.devices.clock.now()
     frames.clear()
     loop.resume()
@@ -222,7 +228,7 @@ def test_pause_keeps_the_device_and_resume_drops_what_was_captured_before():
     assert all(frame.capture_time >= paused_at for frame in frames)
     assert device.opened == 1 and device.streaming[:3] == ['start', 'stop', 'start']
     assert loop.stats().dropped == 0   # frames missed while paused are not drops
-    assert camera.values()['contrast'] == 10
+    assert value(camera, CID.CONTRAST) == 10
 
 
 def test_a_refused_control_is_said_and_not_kept():
@@ -230,10 +236,52 @@ def test_a_refused_control_is_said_and_not_kept():
     loop, frames, log = run_loop(device)
     loop.open()
     try:
-        assert loop.set_control('brightness', 500) == \
-            "brightness: 500 is out of the camera's range -64..64"
-        assert 'brightness' not in loop.wanted_controls()
-        assert loop.set_control('focus', 10) == \
+        names = ControlNames(loop.controls())
+        refused = loop.set_controls({CID.BRIGHTNESS: 500, CID.CONTRAST: 10})
+        assert [names.words(r) for r in refused.values()] == [
+            "brightness: 500 is out of the camera's range -64..64"]
+        assert loop.wanted_controls() == {CID.CONTRAST: 10}
+        refused = loop.set_controls({CID.FOCUS_ABSOLUTE: 10})
+        assert names.words(refused[CID.FOCUS_ABSOLUTE], {CID.FOCUS_ABSOLUTE: 'focus'}) == \
             'focus is inactive while focus_automatic_continuous is 1'
+    finally:
+        loop.close()
+
+
+def test_a_batch_sets_the_automatic_mode_first_and_is_applied_so_after_a_reconnect():
+    device = Device()
+    loop, frames, log = run_loop(device)
+    loop.start()
+    try:
+        # Focus before autofocus in the batch: autofocus goes first, so the focus is free.
+        assert loop.set_controls({CID.FOCUS_ABSOLUTE: 40, CID.FOCUS_AUTO: 0}) == {}
+        assert value(loop.camera, CID.FOCUS_ABSOLUTE) == 40
+        # A press (keep=False) is not pressed again after a reconnect.
+        assert loop.set_controls({CID.GAIN: 7}, keep=False) == {}
+        assert loop.wanted_controls() == {CID.FOCUS_ABSOLUTE: 40, CID.FOCUS_AUTO: 0}
+        device.present.clear()
+        wait_until(lambda: loop.stats().lost == 1, 10, what='the loss')
+        device.present.set()
+        wait_until(lambda: loop.stats().reconnects == 1, 10, what='the reconnect')
+        camera = loop.camera
+        assert (value(camera, CID.FOCUS_AUTO), value(camera, CID.FOCUS_ABSOLUTE),
+                value(camera, CID.GAIN)) == (0, 40, 0)
+    finally:
+        loop.close()
+
+
+def test_what_a_reopened_camera_refuses_is_heard_by_id():
+    device = Device()
+    heard = []
+    loop = CaptureLoop(device.open, lambda camera, frame: None, Log(), name='test',
+                       timing=FAST, on_refused=heard.append)
+    loop.open()
+    try:
+        loop.close()
+        loop.set_controls({CID.BRIGHTNESS: 500})   # lost: kept, checked when it is back
+        loop.open()
+        assert [(cid, refusal.why) for refusals in heard
+                for cid, refusal in refusals.items()] == [
+            (CID.BRIGHTNESS, ": 500 is out of the camera's range -64..64")]
     finally:
         loop.close()

@@ -16,7 +16,7 @@
 
 import socket
 
-from py_vision import display
+from py_vision.viewer import display
 import pytest
 
 

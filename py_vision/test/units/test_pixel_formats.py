@@ -30,6 +30,7 @@ from py_vision.capture.devices import CAMERA, classify, FILE, SYNTHETIC
 from py_vision.capture.pixel_formats import find, FORMATS, fourcc_code, fourcc_text
 from py_vision.capture.source import SourceError
 from py_vision.capture.synthetic_picture import synthetic_yuyv
+from py_vision.control_names import pixel_format_fourcc, USB_CAM_PIXEL_FORMATS
 import pytest
 
 DOCS = Path(__file__).resolve().parents[3] / 'docs'
@@ -40,13 +41,15 @@ RAW = [pixel_format for pixel_format in FORMATS.values() if not pixel_format.com
     ('yuyv', 'YUYV'), ('YUYV', 'YUYV'), (' Nv12 ', 'NV12'), ('grey', 'GREY'), ('y16', 'Y16'),
     ('rgb3', 'RGB3'), ('bgr3', 'BGR3'), ('mjpg', 'MJPG'), ('yu12', 'YU12'),
     ('mjpeg', 'MJPG'), ('mono8', 'GREY'), ('mono16', 'Y16'), ('rgb24', 'RGB3'),
-    ('bgr24', 'BGR3')])
+    ('bgr24', 'BGR3'), ('Mono8', 'GREY')])
 def test_a_fourcc_or_usb_cams_name_finds_its_format(name, fourcc):
-    assert find(name).fourcc == fourcc
+    assert find(pixel_format_fourcc(name)).fourcc == fourcc
 
 
 def test_names_that_are_no_format_find_nothing():
     assert find('auto') is None and find('h265') is None and find('') is None
+    assert find('mjpeg') is None   # usb_cam's name: control_names turns it into MJPG
+    assert pixel_format_fourcc('auto') == 'auto'
 
 
 def test_fourccs_are_v4l2s_numbers():
@@ -86,7 +89,8 @@ def test_the_table_in_the_docs_is_the_codes():
     expected = {}
     for pixel_format in FORMATS.values():
         names = [pixel_format.fourcc.lower()] + [
-            name for name in pixel_format.names if name != pixel_format.fourcc.lower()]
+            name for name, fourcc in USB_CAM_PIXEL_FORMATS.items()
+            if fourcc == pixel_format.fourcc]
         encoding = '`%s`' % pixel_format.encoding if pixel_format.encoding else \
             '(none: `%s`)' % pixel_format.native_encoding
         bus = '%g' % pixel_format.bus_bytes if pixel_format.bus_bytes else 'compressed'

@@ -27,7 +27,9 @@ import struct
 import cv2
 import numpy as np
 from py_vision.capture.synthetic_picture import read_frame_index, synthetic_frame
-from py_vision.web_viewer import CameraError, is_loopback, WebViewer, WebViewerError
+from py_vision.viewer.access import is_loopback
+from py_vision.viewer.camera_access import CameraError
+from py_vision.viewer.server import WebViewer, WebViewerError
 import pytest
 from ros_harness import wait_until
 
@@ -209,6 +211,17 @@ def test_page_is_self_contained_with_the_video_and_stats_elements(make_viewer):
                     'stat-topic', 'stat-clients'):
         assert 'id="%s"' % element in page
     assert 'cam &lt;1&gt; &amp; &quot;x&quot;' in page and 'cam <1>' not in page
+    # Its script and style are the viewer's own files; nothing runs inline.
+    policy = headers['content-security-policy']
+    assert "script-src 'self'" in policy and 'unsafe-inline' not in policy
+    assert re.search(r'<script src="/viewer.js">', page) and '<style' not in page
+    for route, content_type, words in (('/viewer.js', 'text/javascript', 'function poll'),
+                                       ('/viewer.css', 'text/css', '#video')):
+        status, headers, body = request(viewer, route)
+        assert status == 200, route
+        assert headers['content-type'].startswith(content_type)
+        assert words in body.decode()
+        page += body.decode()
     # Nothing from elsewhere: the page has to work on a board with no internet.
     assert not re.search(r'(src|href)="(?!/)', page)
     assert 'http://' not in page and 'https://' not in page
@@ -509,9 +522,9 @@ def test_a_client_that_sends_its_request_slowly_is_dropped_and_its_slot_freed(
     # socket timeout each) would hold one of the few connections for ever: the request as a
     # whole must arrive within the viewer's request time.
     import time
-    from py_vision import web_viewer
-    monkeypatch.setattr(web_viewer, '_REQUEST_TIME', 1.0)
-    monkeypatch.setattr(web_viewer, '_EXTRA_CONNECTIONS', 0)   # one connection in all
+    from py_vision.viewer import server
+    monkeypatch.setattr(server, '_REQUEST_TIME', 1.0)
+    monkeypatch.setattr(server, '_EXTRA_CONNECTIONS', 0)   # one connection in all
     viewer = make_viewer(max_clients=1)
     slow = connect(viewer, timeout=0.2)
     slow.sendall(b'GET / HTTP/1.1\r\n')

@@ -25,7 +25,7 @@ comes from the publisher's parameters and, when it publishes them, its /diagnost
 
 Every ROS call is made on the executor's thread and answered there (async clients, nothing
 waits): the HTTP threads hand their requests over through a guard condition and wait for the
-answer with a bounded timeout. It implements web_viewer.CameraAccess.
+answer with a bounded timeout. It implements camera_access.CameraAccess.
 """
 
 import collections
@@ -37,7 +37,7 @@ import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from py_vision.control_descriptor import is_control, parse_constraints, parse_menu
-from py_vision.web_viewer import CameraError
+from py_vision.viewer.camera_access import CameraError
 from rcl_interfaces.msg import (
     Parameter as ParameterMsg, ParameterEvent, ParameterType, ParameterValue)
 from rcl_interfaces.srv import (

@@ -87,7 +87,7 @@ class Display:
         if mode == 'web':
             # Imported only here: the HTTP server brings OpenSSL along (about 7 MB of memory
             # per process, bench/bench_memory.py), which a node that shows nothing never needs.
-            from py_vision.web_viewer import WebViewer, WebViewerError
+            from py_vision.viewer.server import WebViewer, WebViewerError
             viewer = WebViewer(web_host, web_port, title='py_vision: %s' % title, logger=logger,
                                token=web_token)
             try:
@@ -107,7 +107,7 @@ class Display:
             node.create_timer(WEB_STATS_PERIOD_S, lambda: self.viewer.set_stats(
                 dict(stats.snapshot(), topic=topic)))
             if camera_topic is not None:
-                from py_vision.camera_panel import CameraPanel
+                from py_vision.viewer.camera_panel import CameraPanel
                 self.viewer.set_camera(CameraPanel(node, camera_topic))
             # Once the page is complete; the only place the token is ever written.
             self._logger.info('browser viewer at %s%s' % (self.viewer.url, (

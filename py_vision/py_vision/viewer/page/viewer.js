@@ -1,0 +1,269 @@
+"use strict";
+(function () {
+  const video = document.getElementById("video");
+  const overlay = document.getElementById("overlay");
+  const status = document.getElementById("status");
+  let retry = null;
+
+  function show(id, text) { document.getElementById(id).textContent = text; }
+  function num(value, digits, unit) {
+    return (typeof value === "number") ? value.toFixed(digits) + (unit || "") : "-";
+  }
+  function setStatus(text, cls) { status.textContent = text; status.className = cls; }
+
+  function connectVideo() {
+    retry = null;
+    video.src = "/stream?t=" + Date.now();
+  }
+  function message(text) { overlay.textContent = text; overlay.hidden = !text; }
+  video.addEventListener("error", function () {
+    message("video unavailable (too many viewers, or the node stopped); retrying");
+    if (!retry && !document.hidden) { retry = setTimeout(connectVideo, 3000); }
+  });
+  // A hidden tab stops its stream, so background tabs cost the robot nothing.
+  document.addEventListener("visibilitychange", function () {
+    if (document.hidden) { video.removeAttribute("src"); } else { connectVideo(); }
+  });
+
+  // One request at a time, one per second: the page never floods the server.
+  async function poll() {
+    try {
+      const response = await fetch("/stats", { cache: "no-store" });
+      if (!response.ok) { throw new Error(response.status); }
+      const s = await response.json();
+      show("stat-topic", s.topic || "-");
+      show("stat-fps", num(s.fps, 1));
+      show("stat-latency", num(s.latency_ms_p50, 1, " ms"));
+      show("stat-latency-p99", num(s.latency_ms_p99, 1, " ms"));
+      show("stat-resolution", (s.width && s.height) ? s.width + " \u00d7 " + s.height : "-");
+      show("stat-encoding", s.encoding || "-");
+      show("stat-frames", (typeof s.frames === "number") ? String(s.frames) : "-");
+      show("stat-clients", String(s.clients));
+      // A processing node (cv_bridge_test) also reports what it skipped and how long it took.
+      const processing = typeof s.frames_in === "number";
+      document.querySelectorAll(".proc").forEach(function (e) { e.hidden = !processing; });
+      if (processing) {
+        show("stat-in", String(s.frames_in));
+        show("stat-processed", String(s.processed));
+        show("stat-skipped", String(s.skipped));
+        show("stat-processing", num(s.processing_ms_p50, 1, " ms"));
+        show("stat-processing-p99", num(s.processing_ms_p99, 1, " ms"));
+        show("stat-age", num(s.age_ms_p50, 1, " ms"));
+        show("stat-age-p99", num(s.age_ms_p99, 1, " ms"));
+      }
+      if (s.viewer_frames > 0) {
+        setStatus("live", "live");
+        if (!retry) { message(""); }
+      } else {
+        setStatus("waiting for frames", "");
+        message("waiting for the first frame");
+      }
+    } catch (e) {
+      setStatus("disconnected", "down");
+    }
+    setTimeout(poll, 1000);
+  }
+  poll();
+
+  // The camera panel: what the camera is and its controls, from GET /camera once a second
+  // (a change made elsewhere shows within a second); a change is sent at once, and while a
+  // slider moves at most one request per control is on its way.
+  const panel = document.getElementById("panel");
+  const controlsBox = document.getElementById("controls");
+  let layout = null;
+  const widgets = {};
+  const busy = {};
+  const queued = {};
+
+  function describeValue(c, value) {
+    if (value === null || value === undefined) { return "camera\u2019s own value"; }
+    if (c.menu) {
+      const entry = c.menu.find(function (m) { return m.value === value; });
+      return entry ? entry.label : String(value);
+    }
+    if (typeof value === "boolean") { return value ? "on" : "off"; }
+    return String(value);
+  }
+
+  function makeControl(name, c) {
+    const box = document.createElement("div");
+    box.className = "control";
+    box.id = "control-" + name;
+    const label = document.createElement("label");
+    label.textContent = name.replace(/_/g, " ");
+    label.title = c.description || "";
+    const value = document.createElement("span");
+    value.className = "value";
+    const note = document.createElement("span");
+    note.className = "note";
+    const why = document.createElement("span");
+    why.className = "why";
+    let input;
+    if (c.menu) {
+      // The menu shows the chosen entry itself: its label is not repeated beside the name.
+      value.hidden = true;
+      input = document.createElement("select");
+      const own = document.createElement("option");
+      own.value = "";
+      own.textContent = "camera\u2019s own value";
+      own.disabled = true;
+      input.appendChild(own);
+      c.menu.forEach(function (m) {
+        const option = document.createElement("option");
+        option.value = String(m.value);
+        option.textContent = m.label;
+        input.appendChild(option);
+      });
+    } else if (c.type === "bool") {
+      input = document.createElement("input");
+      input.type = "checkbox";
+    } else if (typeof c.min === "number" && typeof c.max === "number") {
+      input = document.createElement("input");
+      input.type = "range";
+      input.min = c.min;
+      input.max = c.max;
+      input.step = c.step > 0 ? c.step : (c.type === "integer" ? 1 : "any");
+    } else {
+      input = document.createElement("input");
+      input.type = "text";
+    }
+    input.name = name;
+    input.disabled = c.read_only;
+    label.htmlFor = input.id = "input-" + name;
+    input.addEventListener("pointerdown", function () { busy[name] = true; });
+    input.addEventListener(input.type === "range" ? "input" : "change", function () {
+      let v;
+      if (input.type === "checkbox") { v = input.checked; }
+      else if (c.type === "integer") { v = parseInt(input.value, 10); }
+      else if (c.type === "double") { v = parseFloat(input.value); }
+      else { v = input.value; }
+      value.textContent = describeValue(c, v);
+      send(name, v);
+    });
+    ["change", "pointerup", "pointercancel"].forEach(function (event) {
+      input.addEventListener(event, function () { busy[name] = false; });
+    });
+    if (input.type === "checkbox") {
+      value.appendChild(document.createTextNode(""));
+      const right = document.createElement("span");
+      right.className = "value";
+      right.append(value, input);
+      box.append(label, right, why, note);
+    } else {
+      box.append(label, value, input, why, note);
+    }
+    widgets[name] = { box: box, input: input, value: value, note: note, why: why, spec: c };
+    return box;
+  }
+
+  function showValue(name, c) {
+    const w = widgets[name];
+    w.spec = c;
+    w.box.classList.toggle("unset", c.value === null);
+    w.box.classList.toggle("inactive", Boolean(c.inactive));
+    w.why.textContent = c.inactive ? "inactive " + c.inactive : "";
+    w.value.textContent = describeValue(c, c.value);
+    if (busy[name] || name in queued) { return; }
+    if (w.input.type === "checkbox") {
+      w.input.indeterminate = c.value === null;
+      w.input.checked = c.value === true;
+    } else if (w.input.tagName === "SELECT") {
+      w.input.value = c.value === null ? "" : String(c.value);
+    } else if (c.value !== null) {
+      w.input.value = String(c.value);
+    } else if (w.input.type === "range") {
+      w.input.value = String((Number(c.min) + Number(c.max)) / 2);
+    }
+  }
+
+  function renderCamera(cam) {
+    panel.hidden = false;
+    show("panel-message", cam.message || "");
+    const info = cam.camera || {};
+    const shown = cam.shown || {};
+    show("cam-node", cam.publisher || "-");
+    show("cam-device", info.device || "-");
+    show("cam-format", info.pixel_format || "-");
+    show("cam-size", info.size || shown.size || "-");
+    const rates = [];
+    if (typeof shown.fps === "number") { rates.push(shown.fps.toFixed(1) + " fps shown"); }
+    if (typeof info.fps === "number") { rates.push(info.fps.toFixed(1) + " fps at the camera"); }
+    show("cam-rate", rates.join(", ") || "-");
+    show("cam-status", info.status || "-");
+    // A control under a second name (usb_cam's) is shown once, under the camera's name.
+    const all = cam.controls || {};
+    const controls = {};
+    Object.keys(all).forEach(function (n) {
+      if (!(all[n].alias_of && all[n].alias_of in all)) { controls[n] = all[n]; }
+    });
+    const key = JSON.stringify(Object.keys(controls).map(function (n) {
+      const c = controls[n];
+      return [n, c.type, c.min, c.max, c.step, c.menu, c.read_only, c.group];
+    }));
+    if (key !== layout) {
+      layout = key;
+      controlsBox.textContent = "";
+      Object.keys(widgets).forEach(function (n) { delete widgets[n]; });
+      let group = null;
+      Object.keys(controls).forEach(function (n) {
+        if (controls[n].group !== group) {
+          group = controls[n].group;
+          const h = document.createElement("h3");
+          h.textContent = group === "stream" ? "stream settings" : "controls";
+          controlsBox.appendChild(h);
+        }
+        controlsBox.appendChild(makeControl(n, controls[n]));
+      });
+    }
+    Object.keys(controls).forEach(function (n) { showValue(n, controls[n]); });
+  }
+
+  async function send(name, v) {
+    queued[name] = v;
+    if (busy[name + "/sending"]) { return; }
+    busy[name + "/sending"] = true;
+    const w = widgets[name];
+    while (name in queued) {
+      const body = {};
+      body[name] = queued[name];
+      delete queued[name];
+      try {
+        const response = await fetch("/camera/controls", {
+          method: "POST", cache: "no-store", body: JSON.stringify(body),
+          headers: { "Content-Type": "application/json" } });
+        const answer = await response.json();
+        const result = response.ok ? answer.results[name] : { applied: false,
+                                                               reason: answer.error };
+        if (w) { w.note.textContent = result.applied ? "" : "refused: " + result.reason; }
+      } catch (e) {
+        if (w) { w.note.textContent = "not sent: the viewer does not answer"; }
+      }
+    }
+    busy[name + "/sending"] = false;
+  }
+
+  async function pollCamera() {
+    try {
+      const response = await fetch("/camera", { cache: "no-store" });
+      if (response.status === 404) {  // no camera panel (yet): ask again now and then
+        panel.hidden = true;
+        setTimeout(pollCamera, 5000);
+        return;
+      }
+      if (response.ok) { renderCamera(await response.json()); }
+    } catch (e) {
+      // the node stopped: the status line says so; keep trying
+    }
+    setTimeout(pollCamera, 1000);
+  }
+  pollCamera();
+
+  document.getElementById("snapshot").addEventListener("click", function () {
+    const link = document.createElement("a");
+    link.href = "/snapshot.jpg";
+    link.download = "snapshot-" + new Date().toISOString().replace(/[:.]/g, "-") + ".jpg";
+    document.body.appendChild(link);
+    link.click();
+    link.remove();
+  });
+})();
