@@ -212,3 +212,39 @@ def test_a_refused_inactive_control_names_the_automatic_mode_holding_it(
     assert set_parameter(peer, NODE, 'gain_automatic', False).successful
     assert set_parameter(peer, NODE, 'gain', 5).successful
     assert camera.control('gain') == 5
+
+
+def test_the_viewers_panel_shows_every_type_and_presses_a_button(
+        launch, emulated_camera, ros_env):
+    import http.client
+    import json
+    camera = emulated_camera('every_control')
+    launch(NODE, params={'video_device': camera.device, 'image_width': 320,
+                         'image_height': 240}, env=camera.env(ros_env))
+    viewer = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0})
+    port = int(viewer.wait_for_output(r'viewer at http://[^\s/]+:(\d+)/').group(1))
+
+    def request(method, path, body=None):
+        connection = http.client.HTTPConnection('127.0.0.1', port, timeout=10)
+        try:
+            connection.request(method, path, body=body,
+                               headers={'Content-Type': 'application/json'})
+            response = connection.getresponse()
+            return response.status, json.loads(response.read())
+        finally:
+            connection.close()
+
+    def shown():
+        status, state = request('GET', '/camera')
+        return state['controls'] if status == 200 and 'button' in state['controls'] else None
+    controls = wait_until(shown, 30, interval=0.2, what='the controls in GET /camera')
+    assert controls['button']['button'] and controls['button']['type'] == 'bool'
+    assert controls['integer_64_bits']['max'] == 2 ** 63 - 1
+    assert controls['integer_menu']['menu'][-1] == {'value': 8, 'label': '42'}
+    assert controls['gain']['inactive'] == 'while gain_automatic is 1'
+    assert 'string' not in controls and 'area' not in controls
+    status, answer = request('POST', '/camera/controls', json.dumps({'button': True}).encode())
+    assert status == 200 and answer['results']['button']['applied'], answer
+    assert camera.control('button') == 1
+    wait_until(lambda: (shown() or {}).get('button', {}).get('value') is False, 10,
+               what='the button to read back false in the panel')
