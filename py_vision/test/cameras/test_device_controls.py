@@ -248,3 +248,23 @@ def test_the_viewers_panel_shows_every_type_and_presses_a_button(
     assert camera.control('button') == 1
     wait_until(lambda: (shown() or {}).get('button', {}).get('value') is False, 10,
                what='the button to read back false in the panel')
+
+
+def test_list_formats_names_every_control_with_its_type(launch, emulated_camera, ros_env):
+    camera = emulated_camera('every_control')
+    node = launch(NODE, params={'video_device': camera.device},
+                  extra_args=['--list-formats'], env=camera.env(ros_env))
+    assert node.wait_exit(20) == 0, node.output()
+    listed = node.output()
+    for line in (
+            'gain (0x00980913): int 0..255, default 100, value 100, inactive',
+            'do_white_balance (0x0098090d): button',
+            'integer_64_bits (0x0098f903): int64 -9223372036854775808..9223372036854775807, '
+            'default 0, value 0',
+            'bitmask (0x0098f906): bitmask 0x80402010, default 0x80002000, value 0x80002000',
+            'integer_menu (0x0098f907): integer menu 2=2; 3=3; 4=5; 5=8; 6=13; 7=21; 8=42, '
+            'default 4, value 4',
+            'string (0x0098f905): string, not a parameter',
+            'u32_1_element_array (0x0098f908): array, not a parameter',
+            'area (0x0098f90b): compound, not a parameter'):
+        assert '\n  %s\n' % line in listed, line
