@@ -204,11 +204,17 @@ class CaptureLoop:
 
         The others are kept (unless keep is False: a button's press) and applied again after
         every reconnect; while the device is lost they are only kept, and applied once it is
-        back. A refused value is not kept.
+        back. A refused value is not kept; a press while the device is lost is refused.
         """
         with self._lock:
             camera = self._camera
-            refused = camera.set_controls(values) if camera is not None else {}
+            if camera is not None:
+                refused = camera.set_controls(values)
+            elif keep:
+                refused = {}
+            else:
+                refused = {cid: Refusal(cid, ': %s is not open now' % self._name)
+                           for cid in values}
             if keep:
                 self._wanted.update((cid, value) for cid, value in values.items()
                                     if cid not in refused)

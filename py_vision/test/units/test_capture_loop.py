@@ -278,7 +278,9 @@ def test_what_a_reopened_camera_refuses_is_heard_by_id():
     loop.open()
     try:
         loop.close()
-        loop.set_controls({CID.BRIGHTNESS: 500})   # lost: kept, checked when it is back
+        assert loop.set_controls({CID.BRIGHTNESS: 500}) == {}   # kept, checked when it is back
+        pressed = loop.set_controls({CID.GAIN: 1}, keep=False)   # a press cannot wait
+        assert [r.why for r in pressed.values()] == [': test is not open now']
         loop.open()
         assert [(cid, refusal.why) for refusals in heard
                 for cid, refusal in refusals.items()] == [
