@@ -40,6 +40,11 @@ def shown_picture(page):
     return cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_COLOR)
 
 
+def viewer_stats(url):
+    with urllib.request.urlopen(url + 'stats', timeout=5) as reply:
+        return json.loads(reply.read())
+
+
 def shown_index(page):
     picture = shown_picture(page)
     return None if picture is None else read_frame_index(picture)
@@ -51,6 +56,8 @@ def test_the_page_decodes_the_cameras_h264_and_the_node_decodes_nothing(
                                                      'image_transport': 'h264'})
     url = subscriber.wait_for_output(URL_LINE).group(1)
     ClipPublisher(peer)
+    wait_until(lambda: 'video_codec' in viewer_stats(url), 20.0, interval=0.1,
+               what='the subscriber to receive the clip')
     page = browser.new_page()
     page.goto(url)
     first = wait_until(lambda: shown_index(page) is not None and shown_index(page), 20.0,
@@ -61,10 +68,32 @@ def test_the_page_decodes_the_cameras_h264_and_the_node_decodes_nothing(
     wait_until(lambda: shown_index(page) not in (None, first), 10.0, interval=0.1,
                what='the canvas to show another frame of the clip')
     assert 0 <= shown_index(page) < FRAMES
-    with urllib.request.urlopen(url + 'stats', timeout=5) as reply:
-        stats = json.loads(reply.read())
+    stats = viewer_stats(url)
     assert stats['encoded_frames'] == 0, 'the node encoded JPEG: it decoded the video'
     assert stats['clients'] == 1
     wait_until(lambda: page.locator('#stat-encoding').inner_text() == 'h264', 10.0,
                interval=0.2, what="h264 in the page's stats")
+    assert 'Traceback' not in subscriber.output()
+
+
+def test_a_page_opened_before_the_camera_sends_turns_to_its_h264_when_it_comes(
+        launch, peer, browser):  # noqa: F811 (the fixture)
+    subscriber = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0,
+                                                     'image_transport': 'h264'})
+    url = subscriber.wait_for_output(URL_LINE).group(1)
+    page = browser.new_page()
+    page.goto(url)
+    wait_until(lambda: page.locator('#status').inner_text() == 'waiting for frames', 10.0,
+               interval=0.1, what='the page to wait for frames')
+    ClipPublisher(peer)
+    first = wait_until(lambda: shown_index(page) is not None and shown_index(page), 20.0,
+                       interval=0.1, what='the first decoded picture on the canvas')
+    assert page.locator('#video').is_hidden()
+    # Once the page decodes, the node does not: its JPEG count stops.
+    encoded = viewer_stats(url)['encoded_frames']
+    wait_until(lambda: shown_index(page) not in (None, first), 10.0, interval=0.1,
+               what='the canvas to show another frame of the clip')
+    wait_until(lambda: viewer_stats(url)['frames'] > 60, 20.0, interval=0.2,
+               what='two seconds of the clip')
+    assert viewer_stats(url)['encoded_frames'] == encoded
     assert 'Traceback' not in subscriber.output()

@@ -15,8 +15,10 @@
 
   const canvas = document.getElementById("canvas");
   // "mjpeg" (the img shows /stream) or "h264" (this page decodes /video itself, WebCodecs),
-  // chosen from the first /stats answer; null until then, so nothing is fetched twice.
+  // chosen from /stats: at the first answer (null until then, so nothing is fetched twice),
+  // and again when the codec the node receives changes (chosenFor).
   let mode = null;
+  let chosenFor = null;
   let player = null;   // the H.264 player while one runs: {stop}
 
   function connectVideo() {
@@ -54,6 +56,8 @@
   }
 
   async function chooseMode(s) {
+    chosenFor = s.video_codec || "";
+    disconnectVideo();
     const h264 = Boolean(s.video_codec) && await canDecode(s.video_codec);
     mode = h264 ? "h264" : "mjpeg";
     video.hidden = h264;
@@ -145,7 +149,7 @@
         show("stat-age", num(s.age_ms_p50, 1, " ms"));
         show("stat-age-p99", num(s.age_ms_p99, 1, " ms"));
       }
-      if (mode === null) { chooseMode(s); }
+      if (chosenFor !== (s.video_codec || "")) { chooseMode(s); }
       if (s.viewer_frames > 0 && mode === "mjpeg" && s.video_codec && s.video_decoder_missing) {
         setStatus("live", "live");
         message("this browser cannot decode the camera\u2019s H.264 here (it needs WebCodecs " +
