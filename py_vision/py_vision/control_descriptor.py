@@ -83,7 +83,7 @@ def parse_constraints(constraints: str, kinds: Sequence[str] = ()) -> Optional[C
     """Return what a camera control's constraints say, or None when they are not one's."""
     if not is_control(constraints):
         return None
-    words = constraints[len(CONTROL_MARK):].split(';')[0].replace(',', ' ').replace('(', ' ')
+    words = re.sub(r'[,()]', ' ', constraints[len(CONTROL_MARK):].split(';')[0])
     kind = next((word for word in words.split() if word in kinds), None)
     alias = _ALIAS.search(constraints)
     inactive = _INACTIVE.search(constraints)

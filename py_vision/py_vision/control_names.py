@@ -14,14 +14,16 @@
 
 
 """
-The names of a camera's controls: v4l2_camera's for every control, and usb_cam's eleven.
+The names users give a camera's controls and pixel formats: v4l2_camera's, and usb_cam's.
 
-The camera layer knows controls by V4L2 id only; this module names them, and is the one place
-usb_cam's names are written. `param_name` is v4l2_camera's name for a control (the V4L2 name in
-lower case, other characters `_`). `USB_CAM_ALIASES` maps usb_cam's parameter names onto V4L2
-ids, with its three switches as booleans. `ControlNames` is one camera's controls by name: each
-control's own name and each usb_cam name whose control the camera has, and a user's values by
-name turned into device values by id.
+The camera layer knows controls by V4L2 id and pixel formats by FourCC only; this module names
+them, and is the one place usb_cam's names are written. `param_name` is v4l2_camera's name for
+a control (the V4L2 name in lower case, other characters `_`). `USB_CAM_ALIASES` maps usb_cam's
+eleven parameter names onto V4L2 ids, with its three switches as booleans. `ControlNames` is
+one camera's controls by name: each control's own name and each usb_cam name whose control the
+camera has, and a user's values by name turned into device values by id.
+`USB_CAM_PIXEL_FORMATS` maps usb_cam's pixel format names onto the FourCCs that mean the same
+(`pixel_format_fourcc`).
 """
 
 from dataclasses import dataclass
@@ -31,7 +33,8 @@ from typing import Any, Collection, Dict, Mapping, Optional, Sequence, Tuple
 from py_vision.capture.controls import (
     CID, ControlInfo, EXPOSURE_APERTURE_PRIORITY, EXPOSURE_AUTO, EXPOSURE_MANUAL, MENU, Refusal)
 
-__all__ = ['Alias', 'ControlNames', 'param_name', 'Target', 'USB_CAM_ALIASES']
+__all__ = ['Alias', 'ControlNames', 'param_name', 'pixel_format_fourcc', 'Target',
+           'USB_CAM_ALIASES', 'USB_CAM_PIXEL_FORMATS']
 
 
 def param_name(label: str) -> str:
@@ -149,3 +152,14 @@ class ControlNames:
         """
         name = (used or {}).get(refusal.cid) or self.name_of(refusal.cid)
         return refusal.words(lambda cid: name if cid == refusal.cid else self.name_of(cid))
+
+
+# usb_cam's pixel_format names where they mean what a V4L2 FourCC means (its yuyv and uyvy are
+# the FourCCs themselves).
+USB_CAM_PIXEL_FORMATS: Dict[str, str] = {
+    'mjpeg': 'MJPG', 'mono8': 'GREY', 'mono16': 'Y16', 'rgb24': 'RGB3', 'bgr24': 'BGR3'}
+
+
+def pixel_format_fourcc(value: str) -> str:
+    """Return the FourCC (or auto) a pixel_format value means: usb_cam's names turned into it."""
+    return USB_CAM_PIXEL_FORMATS.get(str(value).strip().lower(), str(value).strip())

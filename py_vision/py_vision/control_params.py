@@ -202,7 +202,7 @@ class ControlParameters:
         Apply parameter changes made together (name -> value); None, or why none was applied.
 
         A camera that is lost answers nothing here: the capture loop keeps the values and
-        applies them when it is back.
+        applies them when it is back (a button's press it refuses: it cannot wait).
         """
         controls = self._camera.controls()
         by_id = {control.cid: control for control in controls} or self._by_id

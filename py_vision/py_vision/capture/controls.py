@@ -195,8 +195,9 @@ class ControlInfo:
         else:
             what = '%s, not a parameter' % kind
         if kind in SETTABLE and kind != BUTTON:
-            what += ', default %d, value %s' % (
-                self.default, '?' if self.value is None else self.value)
+            number = '0x%x' if kind == BITMASK else '%d'
+            what += (', default ' + number + ', value %s') % (
+                self.default, '?' if self.value is None else number % self.value)
         flags = ''.join((', read-only' if self.read_only else '',
                          ', inactive' if self.inactive else ''))
         return '(0x%08x): %s%s' % (self.cid, what, flags)

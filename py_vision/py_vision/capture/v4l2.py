@@ -14,15 +14,14 @@
 
 
 """
-V4L2 cameras: the device's own answers through ioctls, and OpenCV streaming the frames.
+V4L2 devices: what they are and offer, and their controls, asked through ioctls.
 
-`V4L2Device` asks the driver directly (fcntl.ioctl, struct layouts of linux/videodev2.h) for
-what OpenCV has no call for: what the device is (QUERYCAP), the pixel formats, frame sizes and
-frame intervals it offers (ENUM_FMT, ENUM_FRAMESIZES, ENUM_FRAMEINTERVALS), and every control
-of every type (QUERY_EXT_CTRL walking V4L2_CTRL_FLAG_NEXT_CTRL and NEXT_COMPOUND, or QUERYCTRL
-on old drivers; QUERYMENU; G_CTRL and S_CTRL, G_EXT_CTRLS and S_EXT_CTRLS for 64-bit values).
-`V4L2Source` is an OpenCV capture of the same device (OpenCV's V4L2 backend streams the frames)
-with such a device beside it for everything else.
+`V4L2Device` asks the driver directly (fcntl.ioctl, struct layouts of linux/videodev2.h):
+what the device is (QUERYCAP), the pixel formats, frame sizes and frame intervals it offers
+(ENUM_FMT, ENUM_FRAMESIZES, ENUM_FRAMEINTERVALS), and every control of every type
+(QUERY_EXT_CTRL walking V4L2_CTRL_FLAG_NEXT_CTRL and NEXT_COMPOUND, or QUERYCTRL on old
+drivers; QUERYMENU; G_CTRL and S_CTRL, G_EXT_CTRLS and S_EXT_CTRLS for 64-bit values).
+Streaming the frames is v4l2_stream's.
 """
 
 import ctypes
@@ -30,16 +29,15 @@ import errno
 import fcntl
 import os
 import struct
-import time
-from typing import List, Optional, Tuple
+from typing import List, Optional
 
-import cv2
 from py_vision.capture.controls import (
     ARRAY, BITMASK, BOOL, BUTTON, COMPOUND, ControlInfo, INT, INT64, INT_MENU, MENU, SETTABLE,
     STRING)
+from py_vision.capture.pixel_formats import fourcc_text
 from py_vision.capture.source import FrameFormat, FrameSize
 
-__all__ = ['V4L2Device', 'V4L2Error', 'V4L2Source', 'fourcc_text']
+__all__ = ['open_problem', 'V4L2Device', 'V4L2Error']
 
 
 def _ioc(direction, number, size):
@@ -120,16 +118,10 @@ CTRL_FLAG_NEXT_COMPOUND = 0x40000000
 _CTRL_TYPES = {1: INT, 2: BOOL, 3: MENU, 4: BUTTON, 5: INT64, 7: STRING, 8: BITMASK,
                9: INT_MENU}
 _COMPOUND_TYPES, _ELEMENT_TYPES = 0x0100, (0x0100, 0x0101, 0x0102)
-_POS_MSEC = cv2.CAP_PROP_POS_MSEC           # read once per frame: the driver's buffer time
 _CTRL_CLASS_TYPE = 6
 # A stepwise or continuous size range is offered at these common sizes.
 _COMMON_SIZES = ((160, 120), (320, 240), (640, 480), (800, 600), (1024, 768), (1280, 720),
                  (1280, 960), (1600, 1200), (1920, 1080), (2560, 1440), (3840, 2160))
-
-
-def fourcc_text(code: int) -> str:
-    """Return a FOURCC code as its four characters: 0x56595559 -> 'YUYV'."""
-    return ''.join(chr((int(code) >> shift) & 0xFF) for shift in (0, 8, 16, 24)).strip('\0 ')
 
 
 def _text(raw: bytes) -> str:
@@ -180,6 +172,7 @@ class V4L2Device:
         except V4L2Error:
             self.close()
             raise
+        self.caps = caps
         if not caps & (CAP_VIDEO_CAPTURE | CAP_VIDEO_CAPTURE_MPLANE):
             self.close()
             raise V4L2Error('not a video capture device (%s has no capture capability)'
@@ -388,84 +381,3 @@ class V4L2Device:
                 return "out of the device's range"
             return 'the device refused it: %s' % os.strerror(error.errno)
         return None
-
-    def busy(self) -> bool:
-        """Return True when another handle is streaming from the device (REQBUFS says EBUSY)."""
-        try:
-            self._ioctl(VIDIOC_REQBUFS, bytearray(_REQBUFS.pack(
-                0, BUF_TYPE_VIDEO_CAPTURE, MEMORY_MMAP, 0, 0)))
-        except OSError as error:
-            return error.errno == errno.EBUSY
-        return False
-
-
-class V4L2Source:
-    """A V4L2 camera opened by OpenCV, with the driver's capture times and the device beside."""
-
-    def __init__(self, cap, device: V4L2Device):
-        self._cap = cap
-        self.device = device
-        self.last_index = None
-        self.last_capture_time = None
-
-    def isOpened(self):  # noqa: N802 (OpenCV's name)
-        """Return True while the device is open."""
-        return self._cap.isOpened()
-
-    def read(self):
-        """Read a frame; its capture time is the driver's buffer timestamp when plausible."""
-        cap = self._cap
-        ok, frame = cap.read()
-        captured = None
-        if ok:
-            # OpenCV's V4L2 backend gives the buffer's CLOCK_MONOTONIC time in ms here.
-            captured = cap.get(_POS_MSEC) / 1e3
-            if not 0 <= time.monotonic() - captured < 10.0:
-                captured = None
-        self.last_capture_time = captured
-        return ok, frame
-
-    def set(self, prop_id, value):  # noqa: A003 (OpenCV's name)
-        """Set an OpenCV capture property; False when the driver refuses."""
-        return bool(self._cap.set(prop_id, value))
-
-    def get(self, prop_id):
-        """Return an OpenCV capture property."""
-        return float(self._cap.get(prop_id))
-
-    def release(self):
-        """Close the device."""
-        self._cap.release()
-        self.device.close()
-
-    def interrupt(self):
-        """Nothing to do: a V4L2 read returns within OpenCV's select() timeout."""
-
-    def formats(self) -> List[FrameFormat]:
-        """Return what the device offers."""
-        return self.device.formats()
-
-    def controls(self) -> List[ControlInfo]:
-        """Return the device's controls with their current values."""
-        return self.device.controls()
-
-    def set_control(self, cid: int, value: int) -> Optional[str]:
-        """Set a device control through the driver."""
-        return self.device.set_control(cid, value)
-
-
-def open_v4l2(path: str, target, open_cap) -> Tuple[V4L2Device, object]:
-    """Open the device for its answers, then OpenCV's capture on it; V4L2Error says why not."""
-    device = V4L2Device(path)
-    try:
-        cap = open_cap(target)
-    except Exception:
-        device.close()
-        raise
-    if not cap.isOpened():
-        cap.release()
-        reason = ('the device is busy (another program is streaming from it)'
-                  if device.busy() else 'OpenCV cannot stream from it')
-        device.close()
-        raise V4L2Error(reason)
-    return device, cap

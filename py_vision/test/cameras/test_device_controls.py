@@ -212,3 +212,59 @@ def test_a_refused_inactive_control_names_the_automatic_mode_holding_it(
     assert set_parameter(peer, NODE, 'gain_automatic', False).successful
     assert set_parameter(peer, NODE, 'gain', 5).successful
     assert camera.control('gain') == 5
+
+
+def test_the_viewers_panel_shows_every_type_and_presses_a_button(
+        launch, emulated_camera, ros_env):
+    import http.client
+    import json
+    camera = emulated_camera('every_control')
+    launch(NODE, params={'video_device': camera.device, 'image_width': 320,
+                         'image_height': 240}, env=camera.env(ros_env))
+    viewer = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0})
+    port = int(viewer.wait_for_output(r'viewer at http://[^\s/]+:(\d+)/').group(1))
+
+    def request(method, path, body=None):
+        connection = http.client.HTTPConnection('127.0.0.1', port, timeout=10)
+        try:
+            connection.request(method, path, body=body,
+                               headers={'Content-Type': 'application/json'})
+            response = connection.getresponse()
+            return response.status, json.loads(response.read())
+        finally:
+            connection.close()
+
+    def shown():
+        status, state = request('GET', '/camera')
+        return state['controls'] if status == 200 and 'button' in state['controls'] else None
+    controls = wait_until(shown, 30, interval=0.2, what='the controls in GET /camera')
+    assert controls['button']['button'] and controls['button']['type'] == 'bool'
+    assert controls['integer_64_bits']['max'] == 2 ** 63 - 1
+    assert controls['integer_menu']['menu'][-1] == {'value': 8, 'label': '42'}
+    assert controls['gain']['inactive'] == 'while gain_automatic is 1'
+    assert 'string' not in controls and 'area' not in controls
+    status, answer = request('POST', '/camera/controls', json.dumps({'button': True}).encode())
+    assert status == 200 and answer['results']['button']['applied'], answer
+    assert camera.control('button') == 1
+    wait_until(lambda: (shown() or {}).get('button', {}).get('value') is False, 10,
+               what='the button to read back false in the panel')
+
+
+def test_list_formats_names_every_control_with_its_type(launch, emulated_camera, ros_env):
+    camera = emulated_camera('every_control')
+    node = launch(NODE, params={'video_device': camera.device},
+                  extra_args=['--list-formats'], env=camera.env(ros_env))
+    assert node.wait_exit(20) == 0, node.output()
+    listed = node.output()
+    for line in (
+            'gain (0x00980913): int 0..255, default 100, value 100, inactive',
+            'do_white_balance (0x0098090d): button',
+            'integer_64_bits (0x0098f903): int64 -9223372036854775808..9223372036854775807, '
+            'default 0, value 0',
+            'bitmask (0x0098f906): bitmask 0x80402010, default 0x80002000, value 0x80002000',
+            'integer_menu (0x0098f907): integer menu 2=2; 3=3; 4=5; 5=8; 6=13; 7=21; 8=42, '
+            'default 4, value 4',
+            'string (0x0098f905): string, not a parameter',
+            'u32_1_element_array (0x0098f908): array, not a parameter',
+            'area (0x0098f90b): compound, not a parameter'):
+        assert '\n  %s\n' % line in listed, line

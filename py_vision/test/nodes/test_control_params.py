@@ -22,8 +22,7 @@ control of every V4L2 type laid out as the kernel's vivid driver has them (`Tabl
 from collections import Counter
 from dataclasses import replace
 
-import cv2
-from py_vision.capture import Camera, CaptureLoop
+from py_vision.capture import Camera, CaptureLoop, StreamFormat
 from py_vision.capture.controls import (
     ARRAY, BITMASK, BOOL, BUTTON, CID, COMPOUND, ControlInfo, holder, INT, INT64, INT_MENU, MENU,
     SETTABLE, STRING)
@@ -73,10 +72,6 @@ class TableSource:
         self.values = {cid: control.default for cid, control in self.table.items()}
         self.presses = Counter()
 
-    def get(self, prop):
-        return {cv2.CAP_PROP_FRAME_WIDTH: 320.0, cv2.CAP_PROP_FRAME_HEIGHT: 240.0,
-                cv2.CAP_PROP_FPS: 30.0}.get(prop, 0.0)
-
     def controls(self):
         return [control.with_value(
             self.values[cid] if control.kind in SETTABLE and control.kind != BUTTON else None,
@@ -96,7 +91,8 @@ class TableSource:
 
 
 def open_loop(source):
-    loop = CaptureLoop(lambda: Camera(source, 'table', 'yuyv', []), lambda camera, frame: None,
+    stream = StreamFormat('YUYV', 320, 240, 30.0)
+    loop = CaptureLoop(lambda: Camera(source, 'table', stream, []), lambda camera, frame: None,
                        Log(), name='table')
     loop.open()
     return loop
