@@ -106,6 +106,7 @@ def with_discovery(env, scope='localhost', peers=''):
             env['ROS_STATIC_PEERS'] = peers
     return env
 
+
 # Fast DDS accepts domain ids up to 232 with the default port mapping.
 _DOMAIN_RANGE = range(1, 200)
 _LOCK_DIR = Path(tempfile.gettempdir()) / 'py_vision_test_domains'

@@ -25,7 +25,6 @@ import base64
 import cv2
 import numpy as np
 from py_vision.capture.synthetic_picture import read_frame_index
-import pytest
 from ros_harness import wait_until
 
 URL_LINE = r'viewer at (http://[^\s/]+:\d+/)'

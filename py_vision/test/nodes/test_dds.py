@@ -116,7 +116,8 @@ def test_frame_size_from_a_parameter_file(tmp_path):
     # ... and a /** section after the node's.
     reordered = tmp_path / 'reordered.yaml'
     reordered.write_text('usbcam_publisher:\n  ros__parameters:\n    image_width: 1280\n'
-                         '    image_height: 720\n/**:\n  ros__parameters:\n    image_height: 960\n')
+                         '    image_height: 720\n'
+                         '/**:\n  ros__parameters:\n    image_height: 960\n')
     assert dds.requested_size(['--ros-args', '--params-file', str(reordered)],
                               '/usbcam_publisher') == (1280, 960)
     # A renamed node reads its new name's section.

@@ -18,8 +18,8 @@ Localhost only means localhost: frames reach subscribers on this host and no oth
 Two "hosts" are two network namespaces joined by a veth pair. The board runs usbcam_publisher
 and a subscriber on the same host (sharing its /dev/shm); the PC runs a subscriber with Fast
 DDS' defaults, discovering by multicast as any PC on the LAN does and also asking the board's
-address directly (ROS_STATIC_PEERS, from Iron on). With the user's localhost-only setting the board's
-subscriber gets every frame, intact, and the PC none.
+address directly (ROS_STATIC_PEERS, from Iron on). With the user's localhost-only setting the
+board's subscriber gets every frame, intact, and the PC none.
 """
 
 import json
@@ -125,7 +125,7 @@ def humble_profile(localhost, ros_env):
 
 
 def from_iron(case):
-    """A case of a variable Humble does not have: skipped there, with the reason."""
+    """Mark a case of a variable Humble does not have: skipped there, with the reason."""
     return pytest.param(case, marks=pytest.mark.skipif(ros_harness.ON_HUMBLE,
                                                        reason=ros_harness.FROM_IRON))
 

@@ -70,7 +70,7 @@ def test_a_gui_opencv_that_cannot_open_a_window_says_why(monkeypatch, x_listener
 
     def gtk_cannot_start(title, flags):
         raise display.cv2.error(
-            "OpenCV(4.6.0) ./modules/highgui/src/window_gtk.cpp:635: error: (-2:Unspecified "
+            'OpenCV(4.6.0) ./modules/highgui/src/window_gtk.cpp:635: error: (-2:Unspecified '
             "error) Can't initialize GTK backend in function 'cvInitSystem'\n")
     monkeypatch.setattr(display.cv2, 'getBuildInformation', lambda: gtk3)
     monkeypatch.setattr(display.cv2, 'namedWindow', gtk_cannot_start)
@@ -78,4 +78,3 @@ def test_a_gui_opencv_that_cannot_open_a_window_says_why(monkeypatch, x_listener
     assert reason == "OpenCV's GTK3 GUI cannot open a window on DISPLAY=127.0.0.1:%d: Can't " \
         'initialize GTK backend' % x_listener
     assert 'headless' not in reason
-

@@ -33,9 +33,9 @@ from py_vision.ros_arguments import (
     given_parameters, node_name, parameters_file, scalar, UnreadableArguments,
     without_parameters)
 import pytest
+from rcl_interfaces.msg import ParameterDescriptor
 import rclpy
 from rclpy.context import Context
-from rcl_interfaces.msg import ParameterDescriptor
 
 SETTINGS = settings(max_examples=150, deadline=None,
                     suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -44,7 +44,7 @@ NODE = 'usbcam_publisher'
 
 @pytest.fixture(scope='module')
 def context():
-    """An rclpy context of the test's own (its nodes only parse arguments: no graph)."""
+    """Give the tests an rclpy context of their own (its nodes only parse arguments)."""
     ctx = Context()
     rclpy.init(args=[], context=ctx)
     yield ctx
