@@ -28,10 +28,17 @@ from typing import Callable, Optional, Tuple
 import cv2
 import numpy as np
 from py_vision.cv_bridge import fill_message_data
+from py_vision.params import Spec
 from py_vision.qos import ImageSubscription
+from py_vision.throttled_log import ThrottledLog
 from sensor_msgs.msg import CompressedImage, Image
 
 TRANSPORTS = ('raw', 'compressed')
+# The largest image a subscriber takes: an 8K bgr8 frame (7680x4320) is 99.5 MB.
+MAX_IMAGE = Spec('max_image_mb', 100.0, 'largest image taken, in MB (1e6 bytes) of pixels: a '
+                 'larger one (from any member of the ROS domain) is refused with a warning',
+                 (0.001, 10000.0))
+
 JPEG_FORMAT = 'bgr8; jpeg compressed bgr8'
 _SOF_MARKERS = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}
 
@@ -124,14 +131,51 @@ class ImagePublisher:
         return raw_done, compressed_done
 
 
-def subscribe(node, base_topic: str, transport: str, callback,
-              depth: int = 10) -> ImageSubscription:
+def image_bytes(msg) -> int:
+    """Return the bytes an Image holds, or a CompressedImage decodes to (as far as it says)."""
+    if isinstance(msg, CompressedImage):
+        size = jpeg_size(msg.data) if len(msg.data) else None
+        return max(len(msg.data), size[0] * size[1] * 3 if size else 0)
+    return max(len(msg.data), msg.height * msg.step)
+
+
+class _SizeLimit:
+    """A subscription's callback that refuses images over max_bytes before anything else."""
+
+    def __init__(self, node, callback, max_bytes: float):
+        self._callback = callback
+        self._max_bytes = max_bytes
+        self._log = ThrottledLog(node.get_logger())
+        self.subscription: Optional[ImageSubscription] = None
+
+    def __call__(self, msg):
+        size = image_bytes(msg)
+        if size <= self._max_bytes:
+            self._callback(msg)
+            return
+        what = msg.format if isinstance(msg, CompressedImage) else '%dx%d %s' % (
+            msg.width, msg.height, msg.encoding)
+        self._log.warning('too large', 'refused a %s image of %.1f MB on %s: over max_image_mb '
+                          '(%g MB)' % (what[:40], size / 1e6, self.subscription.topic_name,
+                                       self._max_bytes / 1e6))
+        self.subscription.renew()
+
+
+def subscribe(node, base_topic: str, transport: str, callback, depth: int = 10,
+              max_image_mb: float = MAX_IMAGE.default) -> ImageSubscription:
     """
     Subscribe to base_topic's frames as `transport` says: raw Images or CompressedImages.
 
     The subscription hears reliable and best-effort publishers alike (qos.ImageSubscription).
+    An image over max_image_mb (of pixels, or of JPEG data) never reaches callback: it is one
+    rate-limited warning, and the subscription is made anew so that the memory the middleware
+    took for it is given back.
     """
+    limit = _SizeLimit(node, callback, max_image_mb * 1e6)
     if transport == 'compressed':
-        return ImageSubscription(node, CompressedImage, compressed_topic(node, base_topic),
-                                 callback, depth=depth)
-    return ImageSubscription(node, Image, base_topic, callback, depth=depth)
+        subscription = ImageSubscription(node, CompressedImage,
+                                         compressed_topic(node, base_topic), limit, depth=depth)
+    else:
+        subscription = ImageSubscription(node, Image, base_topic, limit, depth=depth)
+    limit.subscription = subscription
+    return subscription

@@ -30,7 +30,7 @@ from py_vision.diagnostics import Diagnostics, OK, Recent, Status, WARN
 from py_vision.node_main import main_for
 from py_vision.params import Parameters, Spec, viewer_specs
 from py_vision.stats import stamp_age_s, StreamStats
-from py_vision.transport import jpeg_size, subscribe, TRANSPORTS
+from py_vision.transport import jpeg_size, MAX_IMAGE, subscribe, TRANSPORTS
 from py_vision.viewer.display import Display, DISPLAYS
 from rclpy.node import Node
 
@@ -51,6 +51,7 @@ class VideoSubscriber(Node):
              check=lambda v: v > 0, accepted='a number > 0 and <= 3600', live=True),
         Spec('image_transport', 'raw', 'raw: sensor_msgs/Image on the topic; compressed: '
              'sensor_msgs/CompressedImage on <topic>/compressed', choices=TRANSPORTS),
+        MAX_IMAGE,
     )
 
     display = None  # what close() finds when start-up was interrupted before it was made
@@ -71,7 +72,8 @@ class VideoSubscriber(Node):
         self.display = Display(self.get_logger(), values['display'], values['web_host'],
                                values['web_port'], IMAGE_TOPIC, values['web_token'])
         self.subscription_ = subscribe(self, IMAGE_TOPIC, values['image_transport'],
-                                       self.on_compressed if compressed else self.callback)
+                                       self.on_compressed if compressed else self.callback,
+                                       max_image_mb=values['max_image_mb'])
         self._stats_timer = self.create_timer(self.stats_period, self.report_stats)
         self.display.attach(self, self.stats, self.subscription_.topic_name,
                             camera_topic=self.subscription_.topic_name)
@@ -140,7 +142,7 @@ class VideoSubscriber(Node):
         """Log one line: frames received so far, rate and latency lately, and any problems."""
         s = self.stats.snapshot()
         topic = self.subscription_.topic_name
-        if s['latency_ms_p50'] is None:
+        if not s['recent_frames']:
             self.get_logger().info('no frames on %s in the last %.3g s (%d received in total)' % (
                 topic, self.stats_period, s['frames']))
         else:
@@ -148,11 +150,12 @@ class VideoSubscriber(Node):
             if s['longest_gap_s'] > max(1.0, 5.0 / max(s['fps'], 1e-3)):
                 gap = ', gap of %.2f s' % s['longest_gap_s']
             rate = ('%.1f fps' % s['fps']) if s['fps'] > 0 else 'rate not measured yet'
-            self.get_logger().info(
-                'received %d frames (%s), latency p50 %.1f ms p99 %.1f ms, '
-                '%dx%d %s on %s%s' % (
-                    s['frames'], rate, s['latency_ms_p50'], s['latency_ms_p99'],
-                    s['width'], s['height'], s['encoding'], topic, gap))
+            latency = 'without a stamp (no latency)'
+            if s['latency_ms_p50'] is not None:
+                latency = 'latency p50 %.1f ms p99 %.1f ms' % (
+                    s['latency_ms_p50'], s['latency_ms_p99'])
+            self.get_logger().info('received %d frames (%s), %s, %dx%d %s on %s%s' % (
+                s['frames'], rate, latency, s['width'], s['height'], s['encoding'], topic, gap))
         self.stats.reset_gap()
         new_errors = self.stats.errors - self._errors_reported
         if new_errors > 0:
@@ -188,7 +191,7 @@ def stream_status(snapshot: dict, recent_errors: int, topic: str) -> Status:
               'size': '%dx%d' % (s['width'], s['height']), 'encoding': s['encoding']}
     if recent_errors:
         return Status(WARN, '%d frame(s) could not be shown lately' % recent_errors, values)
-    if s['latency_ms_p50'] is None:
+    if not s['recent_frames']:
         what = 'no frames on %s lately' if s['frames'] else 'waiting for frames on %s'
         return Status(WARN, what % topic, values)
     if s['fps'] <= 0:
