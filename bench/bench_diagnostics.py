@@ -78,6 +78,7 @@ def one_report(calls):
     from py_vision.camera_diagnostics import CameraMonitor
     from py_vision.capture import CaptureStats
     from py_vision.diagnostics import Diagnostics
+    from py_vision.params import Parameters
     import rclpy
     context = rclpy.Context()
     domain = ros_harness.DomainId()
@@ -94,7 +95,7 @@ def one_report(calls):
             # A new frame count every report, as while streaming: the full status is made.
             stats[0] = replace(stats[0], frames=stats[0].frames + 30)
             return monitor.status(stats[0], 'synthetic', 30.0, subscribers)
-        diagnostics = Diagnostics(node, hardware_id='synthetic', period_s=3600.0)
+        diagnostics = Diagnostics(Parameters(node), hardware_id='synthetic', period_s=3600.0)
         diagnostics.add('camera', report)
         diagnostics.publish()  # the first call creates what later ones reuse
         start = time.process_time()

@@ -135,7 +135,7 @@ class CvBridgeTest(Node):
                                values['web_port'], 'cv_bridge_image', values['web_token'])
         # Reliable with a queue of 10, the ROS 2 default: what the seed's rospy publisher
         # gives, and both reliable and best-effort subscribers (rqt_image_view) receive it.
-        self.images = ImagePublisher(self, 'cv_bridge_image', publisher_qos(), self.bridge_,
+        self.images = ImagePublisher(params, 'cv_bridge_image', publisher_qos(), self.bridge_,
                                      lazy_raw=False)
         self.publisher_ = self.images.raw
         # Frames can wait in three places: the subscription's DDS history, the executor
@@ -157,7 +157,7 @@ class CvBridgeTest(Node):
         self.display.attach(self, self.stats, self.publisher_.topic_name,
                             camera_topic=self.subscription_.topic_name)
         self._recent = Recent()
-        self.diagnostics = Diagnostics(self, hardware_id=self.subscription_.topic_name)
+        self.diagnostics = Diagnostics(params, hardware_id=self.subscription_.topic_name)
         self.diagnostics.add('processing', self.processing_status)
         self.get_logger().info('drawing on images from %s, publishing them on %s%s' % (
             self.subscription_.topic_name, self.publisher_.topic_name,

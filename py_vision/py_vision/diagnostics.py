@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Tuple
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from py_vision.params import Parameters
+from py_vision.qos import create_publisher
 from rclpy.qos import QoSProfile
 
 __all__ = ['DIAGNOSTICS_TOPIC', 'Diagnostics', 'ERROR', 'OK', 'Recent', 'STALE', 'Status',
@@ -91,12 +93,13 @@ class Diagnostics:
     so a broken status function shows instead of hiding the rest.
     """
 
-    def __init__(self, node, hardware_id: str = '', period_s: float = PERIOD_S):
-        self._node = node
+    def __init__(self, parameters: Parameters, hardware_id: str = '',
+                 period_s: float = PERIOD_S):
+        node = self._node = parameters.node
         self.hardware_id = hardware_id
         self._reports: List[Tuple[str, Callable[[], Status]]] = []
-        self.publisher = node.create_publisher(DiagnosticArray, DIAGNOSTICS_TOPIC,
-                                               QoSProfile(depth=10))
+        self.publisher = create_publisher(parameters, DiagnosticArray, DIAGNOSTICS_TOPIC,
+                                          QoSProfile(depth=10))
         self._timer = node.create_timer(period_s, self.publish)
 
     def add(self, what: str, report: Callable[[], Status]) -> None:

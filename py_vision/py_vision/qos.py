@@ -12,9 +12,23 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Quality of service for image topics, built from the nodes' string parameters."""
+"""
+Quality of service for the nodes' topics: built from their parameters, overridable per topic.
 
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+Every topic a py_vision node publishes takes rclpy's QoS overrides,
+``qos_overrides.<topic>.publisher.<policy>`` for its history, depth, reliability and
+durability: read-only parameters given on the command line, in a parameter file or by launch,
+the same on Humble and Jazzy. They change the QoS the node chose (for the camera node, its
+`reliability` and `depth` parameters: shorthands for all its topics at once). They are declared
+here, checked like every other parameter (a value that cannot be used is one error naming it),
+before rclpy reads them.
+"""
+
+from typing import Any
+
+from py_vision.params import Parameters, Spec
+from rclpy.qos import HistoryPolicy, QoSPolicyKind, QoSProfile, ReliabilityPolicy
+from rclpy.qos_overriding_options import QoSOverridingOptions
 
 try:
     from rclpy.event_handler import SubscriptionEventCallbacks
@@ -27,10 +41,50 @@ RELIABILITY = {
 }
 
 
+MAX_DEPTH = 1000
+# The policies a user may override on each published topic, and the values each takes.
+_POLICY_WORDS = {
+    QoSPolicyKind.HISTORY: ('keep_last', 'keep_all', 'system_default'),
+    QoSPolicyKind.RELIABILITY: ('reliable', 'best_effort', 'system_default'),
+    QoSPolicyKind.DURABILITY: ('volatile', 'transient_local', 'system_default'),
+}
+_OVERRIDES = QoSOverridingOptions((QoSPolicyKind.HISTORY, QoSPolicyKind.DEPTH,
+                                   QoSPolicyKind.RELIABILITY, QoSPolicyKind.DURABILITY))
+
+
 def publisher_qos(reliability='reliable', depth=10):
     """Return the publisher QoS for a reliability name from RELIABILITY and a queue depth."""
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
                       reliability=RELIABILITY[reliability])
+
+
+def override_specs(topic: str, qos: QoSProfile):
+    """Return the QoS override parameters of a publisher of topic (resolved) with qos."""
+    prefix = 'qos_overrides.%s.publisher.' % topic
+    specs = [Spec(prefix + 'depth', qos.depth, 'queue depth of the publisher of %s (with '
+                  'history keep_last)' % topic, (1, MAX_DEPTH))]
+    for policy, words in _POLICY_WORDS.items():
+        name = policy.name.lower()
+        specs.append(Spec(prefix + name, getattr(qos, name).name.lower(),
+                          '%s of the publisher of %s' % (name, topic), choices=words))
+    return specs
+
+
+def create_publisher(parameters: Parameters, msg_type, topic: str, qos: QoSProfile) -> Any:
+    """
+    Return a publisher of topic with qos, changed by the user's QoS overrides for the topic.
+
+    The overrides are declared (once: a publisher made again after a lifecycle cleanup finds
+    them) and checked first; ConfigError names one that cannot be used.
+    """
+    node = parameters.node
+    for spec in override_specs(node.resolve_topic_name(topic), qos):
+        if not node.has_parameter(spec.name):
+            parameters.declare(spec)
+    # rclpy finds them declared and applies their values (rclpy.qos_overriding_options).
+    return node.create_publisher(msg_type, topic, QoSProfile(
+        history=qos.history, depth=qos.depth, reliability=qos.reliability,
+        durability=qos.durability), qos_overriding_options=_OVERRIDES)
 
 
 class ImageSubscription:

@@ -41,7 +41,7 @@ def offered(output):
     """Return {fourcc: {(width, height): [rates]}} from a listing."""
     found, current = {}, None
     for line in output.splitlines():
-        header = re.match(r'^([A-Z0-9]{4}) \(', line)
+        header = re.match(r'^([A-Z0-9]{2,4}) \(', line)
         if header:
             current = found.setdefault(header.group(1), {})
             continue

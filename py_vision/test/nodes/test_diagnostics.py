@@ -99,7 +99,10 @@ def test_camera_status_warns_below_the_requested_rate(launch, peer):
                                 'pixel_format': 'yuyv'})
     warn, values = monitor.wait_for('usbcam_publisher: camera', WARN)
     assert 'requested 30.0' in warn.message
-    assert abs(float(values['frame rate']) - 10.0) <= 1.5
+    # The camera was set to the 10 fps it offers; the rate measured depends on the machine's
+    # load too (a loaded machine reads frames late), so it is only below the request.
+    assert float(values['camera rate']) == 10.0
+    assert 0 < float(values['frame rate']) < 30.0 * 0.9
 
 
 def test_subscriber_status_shows_rate_latency_and_frames_it_cannot_show(launch, peer):

@@ -68,8 +68,10 @@ def test_unplugged_camera_is_reopened_and_publishing_resumes(launch, peer):
     jumps = [b - a for a, b in zip(indexes, indexes[1:])]
     assert max(jumps) >= 20 * 2, 'the 2.5 s outage shows as missing frame indexes'
     assert indexes == sorted(indexes)
-    # The subscriber's statistics show the outage as a gap.
-    subscriber.wait_for_output(r'gap of (2|3|4)\.\d+ s', 20)
+    # The subscriber's statistics show the outage as a gap: at least the 2.5 s unplugged (the
+    # back-off and a loaded machine may add to it).
+    gap = subscriber.wait_for_output(r'gap of (\d+\.\d+) s', 20)
+    assert float(gap.group(1)) >= 2.0, subscriber.output()
     assert publisher.proc.poll() is None and subscriber.proc.poll() is None
 
 
