@@ -269,7 +269,7 @@ def run_cpu_case(args, env, case_def):
         if role == 'ref':
             pub = case.reference(1920, 1080, 30.0)
         elif role == 'cam':
-            pub = case.camera(1920, 1080, 30.0, 'mjpeg')
+            pub = case.camera(1920, 1080, 30.0, 'mjpg')
         else:
             pub = case.publisher(params, role)
         for sub in subs:

@@ -46,7 +46,7 @@ CAMERA_ARGUMENTS = {
     'image_width': (int, 'requested frame width in pixels'),
     'image_height': (int, 'requested frame height in pixels'),
     'framerate': (float, 'frames per second'),
-    'pixel_format': (str, 'what the camera sends over USB: auto, mjpeg or yuyv'),
+    'pixel_format': (str, 'what the camera sends: auto, or a FourCC --list-formats prints'),
 }
 
 

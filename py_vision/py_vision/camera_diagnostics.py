@@ -18,7 +18,8 @@ The camera's status on /diagnostics, made from what the capture loop counts.
 `CameraMonitor.status()` turns the loop's `CaptureStats` into the status "<node>: camera":
 ERROR while the device is lost (or not open while it should stream), WARN when the measured
 rate is outside RATE_TOLERANCE of the requested one, no frame came for a while, or frames
-were corrupt lately, OK otherwise. Its keys are read by other tools (the browser panel):
+were corrupt, flagged as errors by the driver or dropped (the device's frame numbers skip)
+lately, OK otherwise. Its keys are read by other tools (the browser panel):
 keep them.
 """
 
@@ -33,7 +34,6 @@ RATE_TOLERANCE = 0.1
 # Reports in a row without a new frame (while streaming) before it is a warning; the first
 # report after (re)opening may come before the first frame.
 QUIET_REPORTS_WARN = 2
-PIXEL_FORMAT_NAMES = {'yuyv': 'YUYV', 'mjpeg': 'MJPEG', 'file': 'video file'}
 
 
 class CameraMonitor:
@@ -58,7 +58,7 @@ class CameraMonitor:
         rate = stats.measured_fps if new_frames else 0.0
         values = {
             'device': device,
-            'pixel format': PIXEL_FORMAT_NAMES.get(stats.pixel_format, stats.pixel_format),
+            'pixel format': 'video file' if stats.pixel_format == 'file' else stats.pixel_format,
             'size': '%dx%d' % (stats.width, stats.height) if stats.width else '',
             'frame rate': float(rate),
             'requested rate': float(requested_rate),
@@ -68,6 +68,8 @@ class CameraMonitor:
             'stalls': stats.stalls,
             'stale': stats.stale,
             'corrupt': stats.corrupt,
+            'error frames': stats.errors,
+            'dropped': stats.dropped,
             'reconnects': stats.reconnects,
             'device present': stats.present,
             'streaming': stats.streaming,
@@ -76,7 +78,8 @@ class CameraMonitor:
                       for topic, count in subscribers.items())
         if state is not None:
             values['lifecycle state'] = state
-        recent = self._recent.update(corrupt=stats.corrupt)
+        recent = self._recent.update(corrupt=stats.corrupt, errors=stats.errors,
+                                     dropped=stats.dropped)
         if state is not None and state != 'active':
             what = 'camera open, not streaming' if stats.present else 'camera closed'
             return Status(OK, '%s: %s' % (state, what), values)
@@ -95,6 +98,10 @@ class CameraMonitor:
             problems.append('%.1f fps, requested %.1f' % (rate, requested_rate))
         if recent['corrupt']:
             problems.append('%d corrupt frame(s) lately' % recent['corrupt'])
+        if recent['errors']:
+            problems.append('%d frame(s) flagged as errors lately' % recent['errors'])
+        if recent['dropped']:
+            problems.append('%d frame(s) dropped lately' % recent['dropped'])
         if problems:
             return Status(WARN, '; '.join(problems), values)
         return Status(OK, 'streaming %s at %.1f fps' % (what, rate), values)

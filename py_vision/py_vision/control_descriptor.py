@@ -17,10 +17,11 @@ How a parameter says it is a camera control: written by control_params, read by 
 
 A camera control's descriptor has `additional_constraints` beginning with ``camera control``,
 then its V4L2 id, type, step and default (``camera control 0x00980900 (integer, step 1,
-default 0)``), ``; inactive while ...`` when the camera ignores it now and ``; read-only``;
-one of usb_cam's names has ``camera control: usb_cam name for <control>``. A menu control's
-description ends with its entries: ``Auto Exposure; menu: 1=Manual Mode; 3=Aperture Priority
-Mode``. Only strings here: neither side's layer is imported.
+default 0)``; a button's ``(button)``), ``; inactive while ...`` when the camera ignores it
+now and ``; read-only``; one of usb_cam's names has ``camera control: usb_cam name for
+<control>``. A menu control's description ends with its entries: ``Auto Exposure; menu:
+1=Manual Mode; 3=Aperture Priority Mode`` (an integer menu's labels are its values). Only
+strings here: neither side's layer is imported.
 """
 
 from dataclasses import dataclass
@@ -34,7 +35,7 @@ CONTROL_MARK = 'camera control'
 _MENU_MARK = 'menu: '
 _ALIAS = re.compile(r'\bname for ([A-Za-z0-9_]+)')
 _INACTIVE = re.compile(r'\binactive (while [^;]*)')
-_DEFAULT_INACTIVE = 'an automatic mode controls it'
+_DEFAULT_INACTIVE = "the camera's current mode holds it"
 
 
 def describe(label: str, menu: Sequence[Tuple[int, str]] = ()) -> str:
@@ -47,7 +48,11 @@ def describe(label: str, menu: Sequence[Tuple[int, str]] = ()) -> str:
 def control_constraints(cid: int, kind: str, step: int, default: int,
                         inactive: Optional[str] = None, read_only: bool = False) -> str:
     """Return a control's additional_constraints; inactive: why it is (None: active)."""
-    words = '%s 0x%08x (%s, step %d, default %d)' % (CONTROL_MARK, cid, kind, step, default)
+    if kind == 'button':
+        words = '%s 0x%08x (button)' % (CONTROL_MARK, cid)
+    else:
+        words = '%s 0x%08x (%s, step %d, default %d)' % (
+            CONTROL_MARK, cid, kind, step, default)
     if inactive is not None:
         words += '; inactive while %s' % (inactive or _DEFAULT_INACTIVE)
     if read_only:
@@ -78,7 +83,7 @@ def parse_constraints(constraints: str, kinds: Sequence[str] = ()) -> Optional[C
     """Return what a camera control's constraints say, or None when they are not one's."""
     if not is_control(constraints):
         return None
-    words = constraints[len(CONTROL_MARK):].split(';')[0].replace(',', ' ').replace('(', ' ')
+    words = re.sub(r'[,()]', ' ', constraints[len(CONTROL_MARK):].split(';')[0])
     kind = next((word for word in words.split() if word in kinds), None)
     alias = _ALIAS.search(constraints)
     inactive = _INACTIVE.search(constraints)

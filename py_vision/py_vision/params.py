@@ -45,6 +45,8 @@ _TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER,
 _TYPE_WORDS = {bool: 'a boolean', int: 'an integer', float: 'a number', str: 'a string'}
 _TYPE_NAMES = {bool: 'bool', int: 'integer', float: 'double', str: 'string'}
 _NOT_SET_WORDS = ('null', '~', '')
+# Applies changes of live parameters made together (name -> value); None, or why it refused.
+Applier = Callable[[Dict[str, Any]], Optional[str]]
 
 
 @dataclass(frozen=True)
@@ -213,25 +215,15 @@ class Parameters:
 
     def __init__(self, node):
         self._node = node
-        self._specs: Dict[str, Tuple[Spec, Optional[Callable[[Any], None]]]] = {}
+        # name -> (spec, apply(changes: name -> value) -> None or why it refused them)
+        self._specs: Dict[str, Tuple[Spec, Optional[Applier]]] = {}
         self._declaring = False
-        self._first: set = set()
-        self._checks: list = []
         node.add_on_set_parameters_callback(self._on_set)
 
     @property
     def node(self):
         """Return the node whose parameters these are."""
         return self._node
-
-    def add_check(self, check: Callable[[Dict[str, Any]], Optional[str]]) -> None:
-        """
-        Add a check of a whole set of changes, made before any of them is applied.
-
-        check(changes) gets every live parameter changed at once (name -> checked value) and
-        returns None, or why the set is refused: then nothing is applied.
-        """
-        self._checks.append(check)
 
     def declare(self, spec: Spec, on_change: Optional[Callable[[Any], Optional[str]]] = None
                 ) -> Any:
@@ -244,7 +236,7 @@ class Parameters:
         """
         if spec.live and on_change is None:
             raise ValueError('live parameter %s needs an on_change callback' % spec.name)
-        self._specs[spec.name] = (spec, on_change)
+        self._specs[spec.name] = (spec, _one(spec.name, on_change) if on_change else None)
         node = self._node
         self._declaring = True
         try:
@@ -269,20 +261,17 @@ class Parameters:
             self._declaring = False
         return value
 
-    def declare_shown(self, spec: Spec,
-                      on_change: Optional[Callable[[Any], Optional[str]]] = None,
-                      first: bool = False) -> None:
+    def declare_shown(self, spec: Spec, apply: Optional[Applier] = None) -> None:
         """
         Declare spec's parameter with spec.default, what the node found (a camera's value).
 
-        first: when set together with others, this one is applied before them (an automatic
-        mode before the controls it owns).
+        A live one needs apply(changes): it gets the changes made together to every parameter
+        declared with that same apply (name -> checked value) at once, applies them all or
+        none, and returns None, or why it refused them.
         """
-        if spec.live and on_change is None:
-            raise ValueError('live parameter %s needs an on_change callback' % spec.name)
-        self._specs[spec.name] = (spec, on_change)
-        if first:
-            self._first.add(spec.name)
+        if spec.live and apply is None:
+            raise ValueError('live parameter %s needs an apply callback' % spec.name)
+        self._specs[spec.name] = (spec, apply)
         self._declaring = True
         try:
             self._node.declare_parameter(spec.name, spec.default, spec.descriptor(),
@@ -346,13 +335,14 @@ class Parameters:
 
     def _on_set(self, parameters):
         # rclpy itself refuses read-only parameters, wrong types and values out of the range;
-        # this checks the rest and applies the changes only when all of them are acceptable.
+        # each applier checks the rest of its own changes and takes them all or none, and a
+        # refusal puts back what the appliers before it took.
         if self._declaring:
             return SetParametersResult(successful=True)
         changes = {}
         for parameter in parameters:
-            spec, on_change = self._specs.get(parameter.name, (None, None))
-            if spec is None or on_change is None:
+            spec, apply = self._specs.get(parameter.name, (None, None))
+            if spec is None or apply is None:
                 continue
             if parameter.type_ == Parameter.Type.NOT_SET:
                 if spec.optional:
@@ -365,23 +355,31 @@ class Parameters:
                 changes[parameter.name] = spec.coerce(parameter.value)
             except ConfigError as error:
                 return SetParametersResult(successful=False, reason=str(error))
-        for check in self._checks:
-            reason = check(dict(changes))
-            if reason:
-                return SetParametersResult(successful=False, reason=reason)
+        groups: Dict[Applier, Dict[str, Any]] = {}
+        for name, value in changes.items():
+            groups.setdefault(self._specs[name][1], {})[name] = value
         applied = []
-        for name in sorted(changes, key=lambda name: name not in self._first):
-            reason = self._specs[name][1](changes[name])
+        for apply, group in groups.items():
+            reason = apply(group)
             if reason:
                 self._undo(applied)
                 return SetParametersResult(successful=False, reason=reason)
-            applied.append(name)
+            applied.append((apply, group))
         return SetParametersResult(successful=True)
 
-    def _undo(self, names):
-        # The device refused a change that passed every check: put back what was applied.
-        for name in reversed(names):
-            if self._node.has_parameter(name):
-                old = self._node.get_parameter(name).value
-                if old is not None:
-                    self._specs[name][1](old)
+    def _undo(self, applied):
+        # A later group was refused: put back what the earlier ones applied.
+        node = self._node
+        for apply, group in reversed(applied):
+            old = {name: node.get_parameter(name).value for name in group
+                   if node.has_parameter(name)}
+            old = {name: value for name, value in old.items() if value is not None}
+            if old:
+                apply(old)
+
+
+def _one(name: str, on_change: Callable[[Any], Optional[str]]) -> Applier:
+    """Return on_change(value) as an applier of one parameter's changes."""
+    def apply(changes):
+        return on_change(changes[name])
+    return apply

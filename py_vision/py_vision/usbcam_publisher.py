@@ -29,8 +29,9 @@ Humble 3.3 and Jazzy 7.1):
 
 - configure: parameters checked, publishers made, the camera opened and negotiated;
 - activate: the capture thread starts; frames, compressed and camera_info are published;
-- deactivate: the capture thread stops and releases the device, so the camera stops streaming
-  and frees its USB bandwidth; the controls set are kept and applied again on activate;
+- deactivate: the capture thread stops and so does the stream (VIDIOC_STREAMOFF), which frees
+  the camera's USB bandwidth; the device stays open with its buffers and controls, so nobody
+  else can take it and activate resumes at once;
 - cleanup: the camera and the publishers are released (back to unconfigured);
 - shutdown, from any state: everything released, and the process ends (status 0).
 
@@ -50,8 +51,11 @@ import cv2
 from py_vision import dds
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
 from py_vision.camera_diagnostics import CameraMonitor
-from py_vision.capture import Camera, CaptureLoop, PIXEL_FORMATS, SourceError, SyntheticDevices
+from py_vision.capture import (
+    Camera, CaptureLoop, pixel_format_accepted, SourceError, SyntheticDevices)
 from py_vision.capture.listing import device_listing
+from py_vision.capture.pixel_formats import names_accepted
+from py_vision.control_names import pixel_format_fourcc, USB_CAM_PIXEL_FORMATS
 from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
 from py_vision.diagnostics import Diagnostics
@@ -71,8 +75,8 @@ import yaml
 
 IMAGE_TOPIC = 'usb_camera/image'
 MANAGED = Spec('managed', False, 'run as a lifecycle node: configure opens the camera, activate '
-               'publishes, deactivate releases the camera (it stops streaming), cleanup '
-               'releases the publishers too (ros2 lifecycle set)')
+               'publishes, deactivate stops streaming (the camera kept open), cleanup '
+               'releases the camera and the publishers (ros2 lifecycle set)')
 SUCCESS = TransitionCallbackReturn.SUCCESS
 FAILURE = TransitionCallbackReturn.FAILURE
 # How often the control parameters are brought up to date with the device's values.
@@ -100,8 +104,11 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         Spec('image_height', 480, 'requested frame height in pixels', (1, 8192)),
         Spec('framerate', 10.0, 'requested frames per second', (0.0, 1000.0),
              check=lambda v: v > 0, accepted='a number > 0 and <= 1000'),
-        Spec('pixel_format', 'auto', 'what the camera sends over USB; auto reaches the '
-             'requested rate where the camera can', choices=PIXEL_FORMATS),
+        Spec('pixel_format', 'auto', 'what the camera sends, by the FourCC --list-formats '
+             'prints; auto: what reaches the requested size and rate with the least work',
+             check=lambda v: pixel_format_accepted(pixel_format_fourcc(v)),
+             accepted="auto, or a FourCC: %s, or usb_cam's %s" % (
+                 names_accepted(), ', '.join(USB_CAM_PIXEL_FORMATS))),
         Spec('jpeg_quality', 80, 'JPEG quality of usb_camera/image/compressed when encoded '
              "here (an MJPEG camera's own JPEG is published as it is)", (1, 100), live=True),
         Spec('frame_id', 'usb_camera', 'header.frame_id of the images', check=bool,
@@ -180,12 +187,13 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         self.video_device = values['video_device']
         self.size = (values['image_width'], values['image_height'])
         self.framerate = values['framerate']
-        self.pixel_format = values['pixel_format']
+        self.pixel_format = pixel_format_fourcc(values['pixel_format'])
         self.frame_id = values['frame_id']
         self.jpeg_quality = values['jpeg_quality']
         self._synthetic = SyntheticDevices()
         self.capture = CaptureLoop(self._open_camera, self.publish_image, self.get_logger(),
-                                   name=self.video_device, on_failure=self._capture_failed)
+                                   name=self.video_device, on_failure=self._capture_failed,
+                                   on_refused=self._controls_refused)
         self._monitor = CameraMonitor()
         self.diagnostics = Diagnostics(self._params, hardware_id=self.video_device)
         self.diagnostics.add('camera', self.camera_status)
@@ -209,11 +217,16 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         """Declare the open camera's controls as parameters (once; the loop keeps the values)."""
         if self.controls is not None:  # configured again after a cleanup
             return
-        controls = ControlParameters(self._params, self.capture.set_control,
-                                     self.capture.controls, self.get_logger(), self.video_device)
+        controls = ControlParameters(self._params, self.capture, self.get_logger(),
+                                     self.video_device)
         controls.declare(set(self.values))  # ConfigError: a mistyped value, declared nothing
         self.controls = controls
         self.create_timer(CONTROL_SYNC_PERIOD_S, self.controls.sync)
+
+    def _controls_refused(self, refusals):
+        """Say which controls a reopened camera did not take again (the capture loop's)."""
+        if self.controls is not None:
+            self.controls.warn(refusals)
 
     def _load_calibration(self):
         """Load the calibration; serve set_camera_info."""
@@ -332,7 +345,7 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         return SUCCESS
 
     def on_activate(self, state):
-        """Start capturing and publishing (opening the camera again after a deactivate)."""
+        """Start streaming, capturing and publishing (resuming the stream after a deactivate)."""
         try:
             self.capture.start()
         except SourceError as error:
@@ -343,14 +356,14 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         return SUCCESS
 
     def on_deactivate(self, state):
-        """Stop capturing and release the device, so that it stops streaming."""
-        # Once OpenCV has started a V4L2 stream only releasing the device stops it (and frees
-        # its USB bandwidth); the controls set stay with the capture loop, which applies them
-        # again when activate opens the device.
-        self._close_camera()
+        """Stop capturing and streaming; the device stays open with its buffers and controls."""
+        if not self.capture.pause():
+            get_logger(self._log_name + '.camera').warning(
+                'the capture thread of %s is still in a read; streaming stops when it ends'
+                % self.video_device)
         self._state = 'inactive'
-        self.get_logger().info('deactivated: camera released, streaming stopped after %d '
-                               'frames' % self.capture.stats().frames)
+        self.get_logger().info('deactivated: streaming stopped after %d frames; the camera '
+                               'stays open' % self.capture.stats().frames)
         return SUCCESS
 
     def on_cleanup(self, state):

@@ -19,9 +19,16 @@ import shutil
 import tempfile
 
 from emulated_camera import CompilerMissing, EmulatedCamera
+from hypothesis import settings
 import pytest
 import ros_harness
 from vivid_vm import SessionVm, VmUnavailable
+
+# A property test that fails prints the @reproduce_failure line that replays its example: the
+# falsifying example alone may not (a numpy array's repr rounds). On top of the current
+# profile: hypothesis's own for CI (derandomized) or the default one.
+settings.register_profile('py_vision', print_blob=True)
+settings.load_profile('py_vision')
 
 # Tests never hear each other or the network: every ROS participant (in-process peers and the
 # node processes, which inherit os.environ) keeps discovery on this host.

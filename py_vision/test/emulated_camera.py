@@ -182,18 +182,60 @@ def code_geometry(width, height):
     return code if code is not None else (0, 0, 0)
 
 
-def expected_yuyv(index, width, height):
-    """Return the YUYV frame an emulated camera sends as frame `index` at this size."""
+def _with_cells(width, height, bits):
+    """Return the YUYV picture of this size with the code's cells white where bits say 1."""
     sc = _synthetic()
     frame = background(width, height).copy()
     x, y, cell = code_geometry(width, height)
     if cell:
-        bits = dict(sc._SYNC)
-        bits.update(zip(sc._DATA_CELLS, sc._code_bits(index)))
         for (row, col), bit in bits.items():
             frame[y + row * cell:y + (row + 1) * cell, x + col * cell:x + (col + 1) * cell,
                   0] = sc._WHITE if bit else sc._BLACK
     return frame
+
+
+def expected_yuyv(index, width, height):
+    """Return the YUYV frame an emulated camera sends as frame `index` at this size."""
+    sc = _synthetic()
+    bits = dict(sc._SYNC)
+    bits.update(zip(sc._DATA_CELLS, sc._code_bits(index)))
+    return _with_cells(width, height, bits)
+
+
+def _pixel_format(fourcc):
+    from py_vision.capture.pixel_formats import find
+    return find(fourcc)
+
+
+def _as_sent(pixel_format, yuyv):
+    return np.ascontiguousarray(pixel_format.from_yuyv(yuyv)).reshape(-1).view(np.uint8)
+
+
+def expected_frame(fourcc, index, width, height):
+    """Return the bytes an emulated camera sends as frame `index` in a raw format (1-D)."""
+    return _as_sent(_pixel_format(fourcc), expected_yuyv(index, width, height))
+
+
+def raw_pictures(fourcc, width, height):
+    """
+    Return the paths of a raw format's two pictures of this size: every code cell black, white.
+
+    Made from the YUYV picture the way the pixel format table says (`from_yuyv`); the library
+    copies each cell's bytes from one or the other, plane by plane.
+    """
+    from py_vision.capture import pixel_formats
+    key = hashlib.sha256(Path(pixel_formats.__file__).read_bytes()).hexdigest()[:12]
+    paths = []
+    sc = _synthetic()
+    cells = [(row, col) for row in range(sc._CODE_ROWS) for col in range(sc._CODE_COLS)]
+    for level in (0, 1):
+        path = cache_dir() / ('%s-%dx%d-%d-%s-%s.raw' % (
+            fourcc.strip(), width, height, level, _picture_key(), key))
+        if not path.exists():
+            yuyv = _with_cells(width, height, dict.fromkeys(cells, level))
+            _atomic_write(path, _as_sent(_pixel_format(fourcc), yuyv).tobytes())
+        paths.append(path)
+    return paths
 
 
 def jpeg_tables():
@@ -218,8 +260,9 @@ def load_model(model):
     """
     Return a camera's data file as a dict, with what it implies worked out.
 
-    Each format gets `frames`: [{'width', 'height', 'rates', 'intervals'}], the rates offered
-    at that size (uncompressed formats: those that fit in `usb_bandwidth`, at least the
+    Each format gets its `description` (the pixel format table's unless the file gives one),
+    `compressed` and `frames`: [{'width', 'height', 'rates', 'intervals'}], the rates offered
+    at that size (raw formats: those whose frames fit in `usb_bandwidth`, at least the
     lowest), as V4L2 intervals (1, rate); each control gets its `index` in the shared state.
     """
     path = Path(model) if str(model).endswith('.yaml') else CAMERAS / ('%s.yaml' % model)
@@ -227,13 +270,17 @@ def load_model(model):
     data['model'] = path.stem
     budget = data.get('usb_bandwidth', 24000000)
     for fmt in data['formats']:
-        compressed = fmt['fourcc'] not in ('YUYV', 'UYVY')
-        fmt['compressed'] = compressed
+        pixel_format = _pixel_format(fmt['fourcc'])
+        if pixel_format is None:
+            raise ValueError('%s: py_vision has no pixel format %s' % (path, fmt['fourcc']))
+        fmt.setdefault('description', pixel_format.description)
+        compressed = fmt['compressed'] = pixel_format.compressed
         fmt['frames'] = []
         for width, height in fmt['sizes']:
             rates = sorted(fmt['rates'], reverse=True)
             if not compressed:
-                fitting = [r for r in rates if width * height * 2 * r <= budget]
+                fitting = [r for r in rates
+                           if width * height * pixel_format.bus_bytes * r <= budget]
                 rates = fitting or rates[-1:]
             fmt['frames'].append({'width': width, 'height': height, 'rates': rates,
                                   'intervals': [(1, r) for r in rates]})
@@ -265,12 +312,15 @@ class EmulatedCamera:
     in uvc_emulator/cameras (or is a path to one); `node` is the N of /dev/videoN. Options:
     `serial` and `usb_port` (the by-id and by-path names; the data file's by default),
     `stalled` and `denied` (start with that fault), `corrupt_every` (overrides the data
-    file's broken-JPEG period; 0: never). `close()` unplugs it and removes its directory (the
+    file's broken-JPEG period; 0: never), `drop_every` (every N-th frame lost on the way: the
+    buffers' sequence skips it) and `error_every` (every N-th buffer comes back flagged
+    V4L2_BUF_FLAG_ERROR, empty). `close()` unplugs it and removes its directory (the
     `emulated_camera` fixture does this after the test).
     """
 
     def __init__(self, state_dir, model='webcam_1080p', node=40, **faults):
-        unknown = set(faults) - set(_FAULTS) - {'serial', 'corrupt_every', 'usb_port'}
+        unknown = set(faults) - set(_FAULTS) - {'serial', 'corrupt_every', 'usb_port',
+                                                'drop_every', 'error_every'}
         if unknown:
             raise TypeError('unknown option(s) %s' % ', '.join(sorted(unknown)))
         self.model = load_model(model)
@@ -287,28 +337,44 @@ class EmulatedCamera:
         corrupt = dict(m.get('corrupt_jpeg') or {})
         if 'corrupt_every' in faults:
             corrupt['every'] = faults['corrupt_every']
-        self._write_config(serial, port, corrupt)
+        self._write_config(serial, port, corrupt, faults)
         self._init_state(node, faults)
 
     # -- set-up
 
-    def _write_config(self, serial, port, corrupt):
+    def _write_config(self, serial, port, corrupt, faults):
         m = self.model
         lines = ['card %s' % self.card, 'bus_info usb-0000:00:14.0-%s' % port,
                  'by_id %s' % self.by_id, 'by_path %s' % self.by_path,
                  'jpeg_tables %s' % jpeg_tables(),
                  'corrupt_every %d' % int(corrupt.get('every', 0)),
-                 'corrupt_mode %s' % corrupt.get('mode', 'truncate')]
+                 'corrupt_mode %s' % corrupt.get('mode', 'truncate'),
+                 'drop_every %d' % int(faults.get('drop_every', 0)),
+                 'error_every %d' % int(faults.get('error_every', 0))]
         for fmt in m['formats']:
+            pixel_format = _pixel_format(fmt['fourcc'])
             flags = 1 if fmt['compressed'] else 0
-            lines.append('format %s %d %s' % (fmt['fourcc'], flags, fmt['description']))
+            lines.append('format %s %d %s' % (pixel_format.fourcc, flags, fmt['description']))
+            # YUYV and JPEG are made from the YUYV picture with the controls' effects; any
+            # other raw format from its two pictures, plane by plane.
+            generic = not pixel_format.compressed and pixel_format.fourcc != 'YUYV'
+            if generic:
+                lines.append('planes %s' % ' '.join('%d %d %d' % (
+                    plane.across, plane.per, plane.down) for plane in pixel_format.planes))
             for frame in fmt['frames']:
                 width, height = frame['width'], frame['height']
                 background(width, height)
                 x, y, cell = code_geometry(width, height)
-                bg = cache_dir() / ('background-%dx%d-%s.yuyv' % (width, height, _picture_key()))
-                lines.append('frame %d %d %d %d %d %d %s' % (
-                    width, height, width * height * 2, x, y, cell, bg))
+                picture = cache_dir() / ('background-%dx%d-%s.yuyv' % (
+                    width, height, _picture_key()))
+                size, stride = width * height * 2, pixel_format.bytesperline(width)
+                if generic:
+                    size = pixel_format.frame_bytes(width, height)
+                    picture, white = raw_pictures(pixel_format.fourcc, width, height)
+                lines.append('frame %d %d %d %d %d %d %d %s' % (
+                    width, height, size, stride, x, y, cell, picture))
+                if generic:
+                    lines.append('white %s' % white)
                 lines += ['interval %d %d' % iv for iv in frame['intervals']]
         by_name = {c['name']: c for c in m['controls']}
         for c in m['controls']:

@@ -12,17 +12,27 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""A lifecycle node's services as `ros2 lifecycle set/get` use them, for the tests."""
+"""
+A managed usbcam_publisher as a lifecycle manager and a monitor see it, for the tests.
 
+`Lifecycle` is what `ros2 lifecycle set/get` do (the node's change_state and get_state
+services); `CameraStatus` reads the camera's status on /diagnostics.
+"""
+
+from diagnostic_msgs.msg import DiagnosticArray
 from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_harness import wait_until
+
+NODE = 'usbcam_publisher'
+RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 
 
 class Lifecycle:
     """What `ros2 lifecycle set/get` do: the node's change_state and get_state services."""
 
-    def __init__(self, peer, node='usbcam_publisher'):
+    def __init__(self, peer, node=NODE):
         # change_state's client is made first: see _wait_until_answered.
         self._change = peer.node.create_client(ChangeState, '/%s/change_state' % node)
         self._get = peer.node.create_client(GetState, '/%s/get_state' % node)
@@ -64,3 +74,26 @@ class Lifecycle:
     def get(self):
         """Return the current state's label."""
         return self._call(self._get, GetState.Request()).current_state.label
+
+
+class CameraStatus:
+    """The publisher's status on /diagnostics, as a monitor reads it."""
+
+    def __init__(self, peer):
+        self.arrays = peer.collect(DiagnosticArray, '/diagnostics', RELIABLE)
+
+    def count(self):
+        return len(self.arrays)
+
+    def latest(self):
+        for array in reversed(self.arrays):
+            for status in array.status:
+                if status.name == '%s: camera' % NODE:
+                    return status, {kv.key: kv.value for kv in status.values}
+        return None, {}
+
+    def wait_reports(self, n=2):
+        """Wait for n more reports: the node's own clock, about a second each."""
+        start = self.count()
+        wait_until(lambda: self.count() >= start + n, 30, what='%d diagnostics reports' % n)
+        return self.latest()

@@ -17,7 +17,8 @@
 import time
 
 from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
-from rcl_interfaces.srv import DescribeParameters, GetParameters, SetParameters
+from rcl_interfaces.srv import (
+    DescribeParameters, GetParameters, ListParameters, SetParameters)
 from ros_harness import wait_until
 
 
@@ -97,3 +98,9 @@ def describe_parameters(peer, node_name, names):
     return _one_each(peer, node_name, 'describe_parameters', names,
                      _call(peer, node_name, DescribeParameters, 'describe_parameters',
                            request).descriptors)
+
+
+def list_parameters(peer, node_name):
+    """Return the names of every parameter the node has declared (`ros2 param list`)."""
+    return list(_call(peer, node_name, ListParameters, 'list_parameters',
+                      ListParameters.Request()).result.names)

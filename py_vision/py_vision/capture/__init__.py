@@ -17,21 +17,25 @@
 The camera layer: frame sources, the device's controls and the capture loop, without ROS.
 
 - `source`: the interface every source has (`FrameSource`), `Frame`, `FrameFormat`, `Clock`;
-- `controls`: the control table (`ControlInfo`, one device control described once) and
-  usb_cam's names for controls (`USB_CAM_ALIASES`);
-- `v4l2`: V4L2 cameras: the device's own ioctls, OpenCV streaming the frames;
+- `controls`: a device's controls by V4L2 id (`ControlInfo`, one control described once), the
+  automatic modes that hold others, and a batch of changes checked and ordered;
+- `pixel_formats`: the pixel format table (FourCC, encoding, layout, conversions, bus cost);
+- `devices`: what a `video_device` string names;
+- `v4l2`: V4L2 devices: what they are and offer, their controls (ioctls);
+- `v4l2_stream`: V4L2 cameras streamed by py_vision (mmap buffers);
 - `video_file`: a video file played as a camera;
 - `synthetic_picture` and `synthetic_device`: the synthetic camera, its picture and the device;
-- `camera`: `Camera`, a source opened and negotiated, with its controls by name;
+- `camera`: `Camera`, a source opened and negotiated, with its controls by V4L2 id;
 - `loop`: `CaptureLoop`, open / read / lose / reopen / close on a thread of its own.
 """
 
-from py_vision.capture.camera import Camera, open_source, PIXEL_FORMATS
-from py_vision.capture.controls import ControlInfo, USB_CAM_ALIASES
+from py_vision.capture.camera import Camera, open_source, pixel_format_accepted
+from py_vision.capture.controls import ControlInfo, Refusal
 from py_vision.capture.loop import CaptureLoop, CaptureStats, LoopTiming
-from py_vision.capture.source import Frame, FrameFormat, FrameSize, FrameSource, SourceError
+from py_vision.capture.source import (
+    Frame, FrameFormat, FrameSize, FrameSource, SourceError, StreamFormat)
 from py_vision.capture.synthetic_device import SyntheticDevices
 
 __all__ = ['Camera', 'CaptureLoop', 'CaptureStats', 'ControlInfo', 'Frame', 'FrameFormat',
-           'FrameSize', 'FrameSource', 'LoopTiming', 'open_source', 'PIXEL_FORMATS',
-           'SourceError', 'SyntheticDevices', 'USB_CAM_ALIASES']
+           'FrameSize', 'FrameSource', 'LoopTiming', 'open_source', 'pixel_format_accepted',
+           'Refusal', 'SourceError', 'StreamFormat', 'SyntheticDevices']

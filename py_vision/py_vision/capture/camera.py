@@ -17,120 +17,78 @@
 A camera as usbcam_publisher sees it, without ROS: open with a pixel format, read, control.
 
 `Camera.open()` opens what `video_device` names (`open_source`), negotiates the pixel format
-the camera sends over USB, and says what it really got: size, rate, format, and any request the
-camera refused. In MJPEG mode the camera's own JPEG bytes are kept as they are (OpenCV's
-CAP_PROP_CONVERT_RGB off), so a compressed stream never decodes and re-encodes; `Frame.bgr()`
-decodes only when someone needs the pixels. Controls are the device's own (`ControlInfo`),
-addressed by parameter name or by one of usb_cam's names, and checked against what the device
-reports before they reach it.
+the camera sends (`pixel_format`: a FourCC of the table in pixel_formats, or
+`auto`: the format that reaches the requested size and rate with the least work for the
+output asked for), and says what it really got: size, rate, format, and any request the camera
+refused. Frames are the camera's bytes as sent (`Frame`); a camera's JPEG is checked for being
+whole without decoding it, and decoded only when someone needs its pixels. `start()` and
+`stop()` start and stop the stream, the device kept open in between. Controls are the device's
+own (`ControlInfo`), addressed by V4L2 id, and checked against what the device reports before
+they reach it.
 """
 
 import os
-import stat
-import sys
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Mapping, Optional, Tuple
 
 import cv2
 import numpy as np
-from py_vision.capture.controls import ControlInfo, OWNED_BY, USB_CAM_ALIASES
+from py_vision.capture.controls import check, ControlInfo, governed, Refusal
+from py_vision.capture.devices import CAMERA, classify, FILE
 from py_vision.capture.opencv_env import prepare_opencv
+from py_vision.capture.pixel_formats import COLOUR_OUTPUTS, find, FORMATS, PixelFormat
 from py_vision.capture.source import (
-    Clock, Frame, FrameFormat, FrameSource, MONOTONIC, SourceError)
-from py_vision.capture.synthetic_device import is_synthetic_spec, SyntheticDevices
-from py_vision.capture.v4l2 import open_v4l2, V4L2Error, V4L2Source
+    Clock, Frame, FrameFormat, FrameSource, MONOTONIC, SourceError, StreamFormat)
+from py_vision.capture.synthetic_device import SyntheticDevices
+from py_vision.capture.v4l2 import V4L2Error
+from py_vision.capture.v4l2_stream import V4L2Source
 from py_vision.capture.video_file import video_file_support, VideoFileSource
 
-__all__ = ['Camera', 'index_node', 'open_source', 'PIXEL_FORMATS']
+__all__ = ['Camera', 'open_source', 'pixel_format_accepted']
 
-PIXEL_FORMATS = ('auto', 'mjpeg', 'yuyv')
-_V4L2_NAMES = {'yuyv': 'YUYV', 'mjpeg': 'MJPG'}
-_FOURCCS = {name: float(cv2.VideoWriter_fourcc(*code)) for name, code in _V4L2_NAMES.items()}
-_FORMAT_NAMES = {value: name for name, value in _FOURCCS.items()}
 # Rates within this fraction of the request count as reached (drivers report 29.97 for 30).
 _RATE_TOLERANCE = 0.02
 
 
-def _request(cap, width, height, fps):
-    cap.set(cv2.CAP_PROP_FRAME_WIDTH, width)
-    cap.set(cv2.CAP_PROP_FRAME_HEIGHT, height)
-    if fps > 0:
-        cap.set(cv2.CAP_PROP_FPS, fps)
-
-
-def _open_camera(video_device, path, target, width, height, fps):
-    """Open a V4L2 device (a path or an index): our own handle, then OpenCV's capture."""
-    backend = cv2.CAP_V4L2 if sys.platform.startswith('linux') else cv2.CAP_ANY
-    try:
-        device, cap = open_v4l2(path, target, lambda what: cv2.VideoCapture(what, backend))
-    except V4L2Error as error:
-        raise SourceError('cannot open video_device "%s": %s' % (video_device, error.reason)) \
-            from None
-    _request(cap, width, height, fps)
-    return V4L2Source(cap, device)
-
-
-def index_node(video_device: str) -> Optional[str]:
-    """Return /dev/video<N> when video_device is a camera index (ASCII digits), else None."""
-    index = video_device.strip()
-    return '/dev/video%d' % int(index) if index.isascii() and index.isdigit() else None
+def pixel_format_accepted(value: str) -> bool:
+    """Return True for a pixel_format value: auto, or a FourCC of the table."""
+    return str(value).strip().lower() == 'auto' or find(value) is not None
 
 
 def open_source(video_device, width, height, fps, *, synthetic: Optional[SyntheticDevices] = None,
                 clock: Clock = MONOTONIC) -> FrameSource:
     """
-    Open what `video_device` names and return its FrameSource.
+    Open what `video_device` names (devices.classify) and return its FrameSource.
 
-    - ``synthetic`` or ``synthetic?key=value&...``: the synthetic camera (of `synthetic`, the
-      process's synthetic devices; a new set when None);
-    - an integer (``0``): that V4L2 camera, /dev/video<N>;
-    - a character device (``/dev/video0``, ``/dev/v4l/by-id/...``): that V4L2 camera, the
-      link followed now;
-    - a regular file: a VideoFileSource playing it in a loop, in real time (by `clock`).
-
-    Cameras are asked for width, height and fps; read the size they really give with get().
-    Raises SourceError (one line naming the device and the reason) when it does not open.
+    The synthetic camera is one of `synthetic`, the process's synthetic devices (a new set when
+    None); a video file plays in a loop, in real time (by `clock`); a V4L2 camera is streamed
+    by py_vision (v4l2_stream). Raises SourceError (one line naming the device and the reason)
+    when it does not open.
     """
-    prepare_opencv(fps)
-    device = str(video_device)
-    if is_synthetic_spec(device):
-        devices = synthetic if synthetic is not None else SyntheticDevices(clock)
+    prepare_opencv()
+    target = classify(video_device)
+    device = target.device
+    if target.kind == CAMERA:
         try:
-            cap = devices.open(device, width, height, fps)
-        except ValueError as error:
-            raise SourceError('cannot open video_device "%s": %s' % (device, error)) from None
-        if not cap.isOpened():
-            raise SourceError('cannot open video_device "%s": %s' % (device, cap.error))
-        return cap
-    node = index_node(device)
-    if node is not None:
-        if not os.path.exists(node):
-            raise SourceError('cannot open video_device "%s": no camera %s (%s does not '
-                              'exist)' % (device, device.strip(), node))
-        return _open_camera(device, node, node, width, height, fps)
-    # A by-id or by-path link names the camera wherever it is plugged: follow it each time.
-    path = os.path.realpath(device)
-    try:
-        mode = os.stat(path).st_mode
-    except FileNotFoundError:
-        raise SourceError('cannot open video_device "%s": no such device or file'
-                          % device) from None
-    except OSError as error:
-        raise SourceError('cannot open video_device "%s": %s'
-                          % (device, error.strerror or error)) from None
-    if stat.S_ISCHR(mode):
-        return _open_camera(device, path, path, width, height, fps)
-    if stat.S_ISREG(mode):
-        if not os.access(path, os.R_OK):
+            return V4L2Source(target.path)
+        except V4L2Error as error:
+            raise SourceError('cannot open video_device "%s": %s' % (device, error.reason)) \
+                from None
+    if target.kind == FILE:
+        if not os.access(target.path, os.R_OK):
             raise SourceError('cannot open video_device "%s": permission denied' % device)
-        source = VideoFileSource(path, fps, clock)
+        source = VideoFileSource(target.path, fps, clock)
         if not source.isOpened():
             raise SourceError('cannot open video_device "%s": not a video file OpenCV can read%s'
                               % (device, video_file_support(cv2.getBuildInformation())))
         return source
-    if stat.S_ISDIR(mode):
-        raise SourceError('cannot open video_device "%s": is a directory' % device)
-    raise SourceError('cannot open video_device "%s": neither a video device nor a regular file'
-                      % device)
+    devices = synthetic if synthetic is not None else SyntheticDevices(clock)
+    try:
+        cap = devices.open(device, width, height, fps)
+    except ValueError as error:
+        raise SourceError('cannot open video_device "%s": %s' % (device, error)) from None
+    if not cap.isOpened():
+        raise SourceError('cannot open video_device "%s": %s' % (device, cap.error))
+    return cap
 
 
 def _header_length(view, end: int) -> int:
@@ -191,43 +149,47 @@ class _JpegCheck:
 class Camera:
     """An opened camera, video file or synthetic camera, with what it really gives."""
 
-    def __init__(self, source: FrameSource, device: str, pixel_format: str,
+    def __init__(self, source: FrameSource, device: str, stream: StreamFormat,
                  notes: List[str], requested: Tuple[int, int, float] = (0, 0, 0.0)):
         self.source = source
         self.device = device
-        self.pixel_format = pixel_format   # 'yuyv', 'mjpeg', or 'file'
+        self.stream = stream
+        self.pixel_format: PixelFormat = stream.pixel_format
+        self.file = isinstance(source, VideoFileSource)
         self.notes = notes                 # requests the camera did not grant, in words
         self.requested = requested         # width, height and rate asked for
-        self.width = int(source.get(cv2.CAP_PROP_FRAME_WIDTH))
-        self.height = int(source.get(cv2.CAP_PROP_FRAME_HEIGHT))
-        self.fps = float(source.get(cv2.CAP_PROP_FPS))
+        self.width, self.height, self.fps = stream.width, stream.height, stream.fps
+        self.streaming = False
         self._whole_jpeg = _JpegCheck()
 
     @classmethod
     def open(cls, device: str, width: int, height: int, fps: float,  # noqa: A003
-             pixel_format: str = 'auto', *, synthetic: Optional[SyntheticDevices] = None,
+             pixel_format: str = 'auto', output: str = 'bgr8', *,
+             synthetic: Optional[SyntheticDevices] = None,
              clock: Clock = MONOTONIC) -> 'Camera':
-        """Open device with the size, rate and pixel format asked for; SourceError if it fails."""
-        if pixel_format not in PIXEL_FORMATS:
-            raise ValueError('pixel_format must be one of %s' % ', '.join(PIXEL_FORMATS))
+        """
+        Open device with the size, rate and pixel format asked for; SourceError if it fails.
+
+        `output` is what its frames will be converted to (bgr8, rgb8, mono8, mono16, native):
+        `auto` chooses the format that costs least for it.
+        """
+        if not pixel_format_accepted(pixel_format):
+            raise ValueError('pixel_format must be auto or one of %s' % ', '.join(FORMATS))
         source = open_source(device, width, height, fps, synthetic=synthetic, clock=clock)
         notes = []
-        requested = (width, height, fps)
-        if isinstance(source, VideoFileSource):
-            return cls(source, device, 'file', notes, requested)
         try:
-            chosen = _negotiate(source, device, width, height, fps, pixel_format, notes)
+            stream = _negotiate(source, device, width, height, fps, pixel_format, output, notes)
         except Exception:
             source.release()
             raise
-        return cls(source, device, chosen, notes, requested)
+        return cls(source, device, stream, notes, (width, height, fps))
 
     def describe(self) -> str:
         """Return what the camera gives, and what was asked when it differs, in one line."""
-        what = {'yuyv': 'YUYV', 'mjpeg': 'MJPEG', 'file': 'video file'}[self.pixel_format]
+        what = 'video file' if self.file else self.pixel_format.fourcc
         line = '%dx%d %s at %.4g fps' % (self.width, self.height, what, self.fps)
         width, height, fps = self.requested
-        if self.pixel_format == 'file':
+        if self.file:
             if width and (self.width, self.height) != (width, height):
                 line += " (the file's own size; %dx%d requested)" % (width, height)
         elif (self.width, self.height) != (width, height) or \
@@ -236,128 +198,143 @@ class Camera:
                 width, height, fps)
         return line
 
+    def start(self) -> None:
+        """Start streaming (again); SourceError (one line) when the device will not."""
+        if self.streaming:
+            return
+        try:
+            self.source.start()
+        except V4L2Error as error:
+            raise SourceError('cannot stream from video_device "%s": %s' % (
+                self.device, error.reason)) from None
+        self.streaming = True
+
+    def stop(self) -> None:
+        """Stop streaming, keeping the device open with its buffers and controls."""
+        if self.streaming:
+            self.streaming = False
+            self.source.stop()
+
     def read(self) -> Optional[Frame]:
         """
         Wait for the next frame; None when the read failed.
 
-        A frame whose JPEG is not whole (a corrupt USB transfer) comes back with `corrupt` set.
+        A frame whose JPEG is not whole (a corrupt USB transfer) comes back with `corrupt` set;
+        one the driver flagged as an error with `error` set. Its bytes are valid until the next
+        read() or stop().
         """
-        source = self.source
-        ok, data = source.read()
-        if not ok or data is None:
-            return None
-        if self.pixel_format == 'mjpeg':
-            jpeg = data.reshape(-1)   # OpenCV's buffer is contiguous: a view
-            return Frame(source.last_index, source.last_capture_time, self.width, self.height,
-                         jpeg=jpeg, corrupt=not self._whole_jpeg(jpeg))
-        whole = data.ndim == 3 and data.shape[2] == 3
-        return Frame(source.last_index, source.last_capture_time,
-                     data.shape[1] if whole else 0, data.shape[0],
-                     _bgr=data if whole else None, corrupt=not whole)
+        frame = self.source.next_frame()
+        if frame is not None and frame.pixel_format.jpeg and frame.data is not None \
+                and not frame.corrupt:
+            frame.corrupt = not self._whole_jpeg(frame.data)
+        return frame
 
     def formats(self) -> List[FrameFormat]:
         """Return the pixel formats, sizes and rates the device offers (none for a file)."""
         return self.source.formats()
 
     def controls(self) -> List[ControlInfo]:
-        """Return the device's controls with their current values, and why inactive ones are."""
-        found = self.source.controls()
-        by_id = {control.cid: control for control in found}
-        for position, control in enumerate(found):
-            if control.inactive and not control.inactive_reason and control.cid in OWNED_BY:
-                owner = by_id.get(OWNED_BY[control.cid][0])
-                if owner is not None:
-                    found[position] = control.with_value(
-                        control.value, inactive_reason='%s is %s' % (owner.name, owner.value))
-        return found
+        """Return the device's controls with their values, and what holds the inactive ones."""
+        return governed(self.source.controls())
 
-    def control(self, name: str) -> Optional[ControlInfo]:
-        """Return the control a parameter name (or usb_cam name) means, or None."""
-        controls = {control.name: control for control in self.controls()}
-        if name in controls:
-            return controls[name]
-        alias = USB_CAM_ALIASES.get(name)
-        if alias is not None:
-            return next((c for c in controls.values() if c.cid == alias.cid), None)
-        return None
-
-    def set_control(self, name: str, value) -> Optional[str]:
+    def set_controls(self, values: Mapping[int, int]) -> Dict[int, Refusal]:
         """
-        Set a control by parameter name or usb_cam name; return None, or why not in words.
+        Set controls (V4L2 id -> value; a button: pressed); return why some were not set.
 
-        A usb_cam switch (autoexposure, auto_white_balance, autofocus) takes a boolean. The
-        value is checked against what the device reports (read-only, inactive, range, step,
-        menu) before it reaches the device.
+        Automatic modes are set first, so that the controls they free take the values asked
+        for (controls.check); what the device reports refusing (read-only, inactive, out of
+        its range, step or menu) never reaches it.
         """
-        control = self.control(name)
-        if control is None:
-            return '%s has no %s control' % (self.device, name)
-        alias = USB_CAM_ALIASES.get(name) if name != control.name else None
-        raw = alias.to_device(value, control) if alias is not None else int(value)
-        reason = control.refusal(raw)
-        if reason is not None:
-            return reason if alias is None else reason.replace(control.name, name, 1)
-        refused = self.source.set_control(control.cid, raw)
-        if refused:
-            return '%s refused %s=%s: %s' % (self.device, name, value, refused)
-        return None
-
-    def values(self) -> Dict[str, object]:
-        """Return every control's current value by parameter name."""
-        return {control.name: control.value for control in self.controls()}
+        ordered, refused = check(self.controls(), values)
+        for cid, value in ordered:
+            reason = self.source.set_control(cid, value)
+            if reason:
+                refused[cid] = Refusal(cid, ': %s refused %s (%s)' % (self.device, value, reason))
+        return refused
 
     def interrupt(self) -> None:
         """End a read() waiting in another thread."""
         self.source.interrupt()
 
     def release(self) -> None:
-        """Close the device."""
+        """Stop streaming and close the device."""
+        self.streaming = False
         self.source.release()
 
 
-def _try_format(source, offered, name, width, height, fps):
+def _rank(pixel_format: PixelFormat, listed: Optional[FrameFormat], request, output: str):
     """
-    Ask for a pixel format at a size and rate; return (format name or None, rate obtained).
+    Return how well a format serves a request (lower is better) for `auto`.
 
-    The size and rate asked for are the nearest the device lists for that format (`offered`,
-    by V4L2 FOURCC), so what the driver gives is what the device's enumeration says.
+    Formats that reach the requested size and rate come first, the least work for `output`
+    first among them (a format without colour last for a colour output, and fewer bits last
+    for mono16); then the others, nearest size, then highest rate first.
     """
-    listed = offered.get(_V4L2_NAMES[name])
-    if listed is not None:
-        width, height, fps = listed.nearest(width, height, fps)
-    source.set(cv2.CAP_PROP_FOURCC, _FOURCCS[name])
-    # The camera keeps its JPEG bytes only with OpenCV's conversion off.
-    source.set(cv2.CAP_PROP_CONVERT_RGB, 0 if name == 'mjpeg' else 1)
-    source.set(cv2.CAP_PROP_FRAME_WIDTH, width)
-    source.set(cv2.CAP_PROP_FRAME_HEIGHT, height)
-    source.set(cv2.CAP_PROP_FPS, fps)
-    got = _FORMAT_NAMES.get(source.get(cv2.CAP_PROP_FOURCC))
-    if got is not None:
-        source.set(cv2.CAP_PROP_CONVERT_RGB, 0 if got == 'mjpeg' else 1)
-    return got, source.get(cv2.CAP_PROP_FPS)
+    width, height, fps = request
+    got = listed.nearest(width, height, fps) if listed is not None else request
+    fits = (pixel_format.mono and output in COLOUR_OUTPUTS,
+            -min(pixel_format.bits, 16 if output == 'mono16' else 8))
+    if got[:2] == (width, height) and got[2] >= fps * (1 - _RATE_TOLERANCE):
+        return (0,) + fits + (pixel_format.cost(output),)
+    outside = _outside_overlap(got[0], got[1], width, height)
+    return (1, outside, -got[2]) + fits + (pixel_format.cost(output),)
 
 
-def _negotiate(source, device, width, height, fps, pixel_format, notes):
-    """Choose the pixel format; return its name and add what was not granted to notes."""
+def _outside_overlap(width, height, other_width, other_height):
+    overlap = min(width, other_width) * min(height, other_height)
+    return width * height + other_width * other_height - 2 * overlap
+
+
+def _candidates(offered: Dict[str, FrameFormat], request, output: str) -> List[PixelFormat]:
+    """Return the formats auto tries, best first: those offered that py_vision converts."""
+    known = [FORMATS[fourcc] for fourcc in FORMATS if not offered or fourcc in offered]
+    return sorted(known, key=lambda pf: _rank(pf, offered.get(pf.fourcc), request, output))
+
+
+def _negotiate(source, device, width, height, fps, wanted, output, notes) -> StreamFormat:
+    """Choose the pixel format; return what the source gives and add what was not granted."""
     offered = {listed.fourcc: listed for listed in source.formats()}
-    wanted = ('yuyv', 'mjpeg') if pixel_format == 'auto' else (pixel_format,)
-    got, rate = _try_format(source, offered, wanted[0], width, height, fps)
-    if pixel_format == 'auto' and (got != 'yuyv' or rate < fps * (1 - _RATE_TOLERANCE)):
-        yuyv_rate = rate if got == 'yuyv' else 0.0
-        got, rate = _try_format(source, offered, 'mjpeg', width, height, fps)
-        if got != 'mjpeg' or rate <= yuyv_rate:
-            got, rate = _try_format(source, offered, 'yuyv', width, height, fps)
-    if got is None:
-        raise SourceError('cannot open video_device "%s": it sends neither YUYV nor MJPEG'
-                          % device)
-    if pixel_format != 'auto' and got != pixel_format:
-        notes.append('the camera refuses pixel_format %s; it gives %s instead' % (
-            pixel_format, got))
-    if rate < fps * (1 - _RATE_TOLERANCE):
-        why = ''
-        if got == 'yuyv':
-            why = ' (YUYV at this size is limited by USB 2.0; pixel_format:=mjpeg or auto ' \
-                  'reaches higher rates)'
+    request = (width, height, fps)
+    chosen = find(wanted) if wanted.strip().lower() != 'auto' else None
+    candidates = _candidates(offered, request, output)
+    if chosen is not None and (not offered or chosen.fourcc in offered):
+        candidates = [chosen]
+    if not candidates:
+        raise SourceError('cannot open video_device "%s": it sends no pixel format py_vision '
+                          'can convert (it offers %s)' % (device, ', '.join(offered)))
+    for candidate in candidates:
+        listed = offered.get(candidate.fourcc)
+        asked = listed.nearest(width, height, fps) if listed is not None else request
+        try:
+            stream = source.configure(candidate, *asked)
+        except V4L2Error as error:
+            raise SourceError('cannot open video_device "%s": %s' % (device, error.reason)) \
+                from None
+        if stream.pixel_format is not None:
+            break
+    else:
+        raise SourceError('cannot open video_device "%s": it sends %s, which py_vision cannot '
+                          'convert' % (device, stream.fourcc))
+    got = stream.pixel_format
+    if chosen is not None and got is not chosen and not isinstance(source, VideoFileSource):
+        offers = ' (it offers %s)' % ', '.join(offered) if chosen.fourcc not in offered else ''
+        notes.append('the camera refuses pixel_format %s%s; it gives %s instead' % (
+            wanted, offers, got.fourcc))
+    if stream.fps < fps * (1 - _RATE_TOLERANCE) and not isinstance(source, VideoFileSource):
         notes.append('%.4g fps requested, the camera gives %.4g fps in %s%s' % (
-            fps, rate, got.upper(), why))
-    return got
+            fps, stream.fps, got.fourcc, _faster(offered, got, stream, wanted)))
+    return stream
+
+
+def _faster(offered, got, stream, wanted) -> str:
+    """Return a hint naming a compressed format that reaches a higher rate, or ''."""
+    if got.compressed:
+        return ''
+    for fourcc, listed in offered.items():
+        pixel_format = find(fourcc)
+        if pixel_format is not None and pixel_format.compressed and listed.nearest(
+                stream.width, stream.height, 1000.0)[2] > stream.fps:
+            hint = 'auto reaches higher rates' if wanted.strip().lower() == 'auto' else \
+                'pixel_format:=%s or auto reaches higher rates' % fourcc.lower()
+            return ' (%s at this size is limited by the bus; %s)' % (got.fourcc, hint)
+    return ''

@@ -17,19 +17,22 @@
 What a device offers, as text: `usbcam_publisher --list-formats`.
 
 Asks the device itself (V4L2 ioctls, or the synthetic camera's model, or the file's own size),
-without streaming and without ROS: each pixel format with its frame sizes and rates, then the
+without streaming and without ROS: each pixel format with its frame sizes and rates and what
+py_vision makes of it (its sensor_msgs encoding as sent, from the pixel format table), then the
 controls with their ranges, menus and values.
 """
 
-import os
 from typing import List
 
 import cv2
-from py_vision.capture.camera import index_node, open_source
+from py_vision.capture.camera import open_source
 from py_vision.capture.controls import ControlInfo
+from py_vision.capture.devices import classify, FILE, SYNTHETIC
+from py_vision.capture.pixel_formats import find
 from py_vision.capture.source import FrameFormat, SourceError
-from py_vision.capture.synthetic_device import is_synthetic_spec, SyntheticDevices
+from py_vision.capture.synthetic_device import SyntheticDevices
 from py_vision.capture.v4l2 import V4L2Device, V4L2Error
+from py_vision.control_names import param_name
 
 __all__ = ['device_listing']
 
@@ -38,8 +41,19 @@ def _rates(rates) -> str:
     return ', '.join('%g' % rate for rate in rates) + ' fps'
 
 
+def _what_it_gives(fourcc: str) -> str:
+    pixel_format = find(fourcc)
+    if pixel_format is None:
+        return 'not a format py_vision converts'
+    if pixel_format.jpeg:
+        return "compressed: the camera's JPEG is published as it is"
+    if pixel_format.encoding is None:
+        return 'native: %s (sensor_msgs has no encoding for it)' % pixel_format.native_encoding
+    return 'native: %s' % pixel_format.encoding
+
+
 def _format_lines(listed: FrameFormat) -> List[str]:
-    lines = ['%s (%s)' % (listed.fourcc, listed.description)]
+    lines = ['%s (%s), %s' % (listed.fourcc, listed.description, _what_it_gives(listed.fourcc))]
     if listed.size_range:
         low_w, low_h, high_w, high_h = listed.size_range
         lines.append('  any size from %dx%d to %dx%d, e.g.:' % (low_w, low_h, high_w, high_h))
@@ -55,13 +69,14 @@ def _control_lines(controls: List[ControlInfo]) -> List[str]:
     if not controls:
         return ['controls: none']
     return ['controls (parameters of usbcam_publisher):'] + [
-        '  ' + control.summary() for control in controls]
+        '  %s %s' % (param_name(control.label), control.summary()) for control in controls]
 
 
 def device_listing(video_device: str) -> str:
     """Return what video_device offers, as lines of text; SourceError (one line) if it can't."""
-    device = str(video_device)
-    if is_synthetic_spec(device):
+    target = classify(video_device)
+    device = target.device
+    if target.kind == SYNTHETIC:
         source = open_source(device, 640, 480, 30.0, synthetic=SyntheticDevices())
         try:
             lines = ['%s: the synthetic camera (USB 2.0, a scaler)' % device]
@@ -71,8 +86,7 @@ def device_listing(video_device: str) -> str:
         finally:
             source.release()
         return '\n'.join(lines) + '\n'
-    path = index_node(device) or os.path.realpath(device)
-    if os.path.isfile(path):
+    if target.kind == FILE:
         source = open_source(device, 0, 0, 0)
         try:
             return '%s: a video file, %dx%d at %g fps (no formats or controls to choose)\n' % (
@@ -80,11 +94,9 @@ def device_listing(video_device: str) -> str:
                 source.get(cv2.CAP_PROP_FRAME_HEIGHT), source.get(cv2.CAP_PROP_FPS))
         finally:
             source.release()
-    if not os.path.exists(path):
-        raise SourceError('cannot open video_device "%s": no such device or file' % device)
     try:
-        with V4L2Device(path) as opened:
-            where = device if path == device else '%s (%s)' % (device, path)
+        with V4L2Device(target.path) as opened:
+            where = device if target.path == device else '%s (%s)' % (device, target.path)
             lines = ['%s: %s, driver %s, %s' % (where, opened.card, opened.driver,
                                                 opened.bus_info)]
             for listed in opened.formats():

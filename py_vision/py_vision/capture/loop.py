@@ -22,26 +22,29 @@ interface that maps onto a lifecycle node:
 
 ===============  ============================================================================
 ``open()``       configure: open and negotiate, apply the controls the user set; no streaming
-``start()``      activate: read frames on the capture thread and hand them to ``on_frame``
-``close()``      deactivate and cleanup: stop reading and release the device (once OpenCV
-                 has started a V4L2 stream, only a release stops it); start() opens it again
-``pause()``      stop reading, the device kept open (and streaming, with V4L2)
+``start()``      activate: start streaming, read frames on the capture thread and hand them
+                 to ``on_frame`` (opening the camera first if it is closed)
+``pause()``      deactivate: stop reading and streaming (VIDIOC_STREAMOFF), the device kept
+                 open with its buffers and controls, so that start() resumes at once
+``close()``      cleanup: stop reading and release the device; start() opens it again
 ===============  ============================================================================
 
 A device that fails (reads fail, or no frame for `stall_periods` frame periods: a stall) is
 lost: it is released and reopened with back-off, and the controls set through the loop are
-applied again. Frames captured before the loop (re)started reading are stale and dropped, and
-a corrupt frame is counted and dropped: on_frame sees only new frames whose JPEG holds
-together, and a frame found corrupt while on_frame decodes it (`Frame.bgr()` None) is counted
-too (on_frame publishes no part of it). `stats()` gives the counters diagnostics report.
+applied again. Frames captured before the loop (re)started reading are stale and dropped; a
+frame the driver flagged as an error, or a corrupt one, is counted and dropped; frames the
+device's numbering skips are counted as dropped: on_frame sees only new, whole frames, and a
+frame found corrupt while on_frame decodes it (`Frame.image()` None) is counted too (on_frame
+publishes no part of it). A frame's bytes are valid while on_frame runs. `stats()` gives the
+counters diagnostics report.
 """
 
 from dataclasses import dataclass, replace
 import threading
-from typing import Callable, Dict, List, Optional, Sequence
+from typing import Callable, Dict, List, Mapping, Optional, Sequence
 
 from py_vision.capture.camera import Camera
-from py_vision.capture.controls import ControlInfo, OWNED_BY
+from py_vision.capture.controls import ControlInfo, Refusal
 from py_vision.capture.frame_memory import keep_frame_buffers
 from py_vision.capture.source import Clock, Frame, MONOTONIC, SourceError
 
@@ -68,11 +71,13 @@ class CaptureStats:
     lost: int = 0            # times the device was lost (failed reads, stall, unplug)
     stalls: int = 0          # ... of which stalls: no frame and no error
     stale: int = 0           # frames dropped as captured before reading (re)started
-    corrupt: int = 0         # frames dropped as not whole (a corrupt JPEG)
+    corrupt: int = 0         # frames dropped as not whole (a corrupt JPEG, a short buffer)
+    errors: int = 0          # frames dropped as the driver flagged them (buffer errors)
+    dropped: int = 0         # frames the device's numbering shows it never delivered
     reconnects: int = 0      # times the device came back
     present: bool = False    # the device is open
     streaming: bool = False  # the capture thread is reading
-    pixel_format: str = ''   # 'yuyv', 'mjpeg', 'file'
+    pixel_format: str = ''   # the FourCC, or 'file'
     width: int = 0
     height: int = 0
     fps: float = 0.0         # the rate the device was set to
@@ -86,13 +91,16 @@ class CaptureLoop:
     `open_camera()` returns an opened Camera or raises SourceError; `on_frame(camera, frame)`
     publishes a frame (on the capture thread); `logger` has info/warning/error. `clock` and
     `timing` are for tests. `on_failure(error)` is called when the capture thread fails with
-    an unexpected error (on_frame raised): the loop then stops reading.
+    an unexpected error (on_frame raised): the loop then stops reading. `on_refused(refusals)`
+    hears which controls a reopened camera did not take again (V4L2 id -> Refusal); without it
+    they are logged by id.
     """
 
     def __init__(self, open_camera: Callable[[], Camera],
                  on_frame: Callable[[Camera, Frame], None], logger, *, name: str = 'camera',
                  clock: Clock = MONOTONIC, timing: LoopTiming = LoopTiming(),
-                 on_failure: Optional[Callable[[Exception], None]] = None):
+                 on_failure: Optional[Callable[[Exception], None]] = None,
+                 on_refused: Optional[Callable[[Dict[int, Refusal]], None]] = None):
         self._open_camera = open_camera
         self._on_frame = on_frame
         self._log = logger
@@ -100,14 +108,16 @@ class CaptureLoop:
         self._clock = clock
         self._timing = timing
         self._on_failure = on_failure
+        self._on_refused = on_refused or self._log_refused
         self._lock = threading.Lock()      # guards camera and wanted controls
         self._camera: Optional[Camera] = None
-        self._wanted: Dict[str, object] = {}
+        self._wanted: Dict[int, int] = {}  # V4L2 id -> value, applied at every (re)open
         self._thread: Optional[threading.Thread] = None
         self._stop = threading.Event()
         # Counted per frame in plain attributes; stats() makes the snapshot.
         self._stats = CaptureStats()
-        self._frames = self._stale = self._corrupt = 0
+        self._frames = self._stale = self._corrupt = self._errors = self._dropped = 0
+        self._last_index: Optional[int] = None   # of the frame before, while reading on
         self._not_before = 0.0
         self._rate_start, self._rate_frames, self._rate = 0.0, 0, 0.0
 
@@ -126,15 +136,23 @@ class CaptureLoop:
             return self._camera
 
     def start(self) -> None:
-        """Read frames on the capture thread (opening the camera first if it is closed)."""
+        """
+        Stream and read frames on the capture thread (opening the camera first if it is closed).
+
+        SourceError (one line) when the camera does not open or its stream does not start.
+        """
         thread = self._thread
         if thread is not None:
             if thread.is_alive() and not self._stop.is_set():
                 return  # reading already
             if not self.pause():
                 return  # a paused thread that has still not ended
-        self.open()
+        with self._lock:
+            if self._camera is None:
+                self._set_camera(self._open_camera())
+            self._camera.start()
         self._stop.clear()
+        self._last_index = None
         self._not_before = self._clock.now()
         # Said before the thread runs: what it reports (a loss) is never overwritten.
         self._update(streaming=True)
@@ -145,11 +163,12 @@ class CaptureLoop:
 
     def pause(self, timeout: float = 2.0) -> bool:
         """
-        Stop reading, keeping the device open with its controls; False if still reading.
+        Stop reading and streaming, keeping the device open with its controls; False if not.
 
-        The driver may go on filling its buffers meanwhile: what it captured before start()
-        is dropped then, never handed to on_frame. A thread that did not end within timeout
-        is left to end (a read stuck in the driver); start() and close() wait for it.
+        A source that cannot stop its stream may go on filling buffers meanwhile: what it
+        captured before start() is dropped then, never handed to on_frame. A thread that did
+        not end within timeout is left to end (a read stuck in the driver); start() and close()
+        wait for it (False meanwhile).
         """
         thread = self._thread
         if thread is None:
@@ -162,6 +181,9 @@ class CaptureLoop:
         if thread.is_alive():
             return False
         self._thread = None
+        with self._lock:
+            if self._camera is not None:
+                self._camera.stop()
         self._update(streaming=False)
         return True
 
@@ -176,29 +198,29 @@ class CaptureLoop:
             self._update(present=False)
         return ended
 
-    def set_control(self, name: str, value) -> Optional[str]:
+    def set_controls(self, values: Mapping[int, int], keep: bool = True) -> Dict[int, Refusal]:
         """
-        Set a control by parameter name or usb_cam name; None when done, else why not.
+        Set controls (V4L2 id -> value) on the camera; return those it refused and why.
 
-        While the device is lost the value is kept and applied when it is back; it is
-        applied again after every reconnect.
+        The others are kept (unless keep is False: a button's press) and applied again after
+        every reconnect; while the device is lost they are only kept, and applied once it is
+        back. A refused value is not kept; a press while the device is lost is refused.
         """
         with self._lock:
             camera = self._camera
             if camera is not None:
-                reason = camera.set_control(name, value)
-                if reason:
-                    return reason
-                # The newest value of a control wins, whichever name it was set by.
-                cid = camera.control(name).cid
-                for other in list(self._wanted):
-                    control = camera.control(other)
-                    if control is not None and control.cid == cid:
-                        del self._wanted[other]
-            self._wanted[name] = value
-        return None
+                refused = camera.set_controls(values)
+            elif keep:
+                refused = {}
+            else:
+                refused = {cid: Refusal(cid, ': %s is not open now' % self._name)
+                           for cid in values}
+            if keep:
+                self._wanted.update((cid, value) for cid, value in values.items()
+                                    if cid not in refused)
+        return refused
 
-    def wanted_controls(self) -> Dict[str, object]:
+    def wanted_controls(self) -> Dict[int, int]:
         """Return the controls set through the loop (applied again at each reopen)."""
         return dict(self._wanted)
 
@@ -211,7 +233,8 @@ class CaptureLoop:
     def stats(self) -> CaptureStats:
         """Return the counters so far (a snapshot)."""
         return replace(self._stats, frames=self._frames, stale=self._stale,
-                       corrupt=self._corrupt, measured_fps=self._rate)
+                       corrupt=self._corrupt, errors=self._errors, dropped=self._dropped,
+                       measured_fps=self._rate)
 
     @property
     def running(self) -> bool:
@@ -226,18 +249,18 @@ class CaptureLoop:
         if camera is None:
             self._update(present=False)
             return
-        owners = {owner for owner, _ in OWNED_BY.values()}
-
-        def owner_first(item):
-            control = camera.control(item[0])
-            return 0 if control is not None and control.cid in owners else 1
-        for name, value in sorted(self._wanted.items(), key=owner_first):
-            reason = camera.set_control(name, value)
-            if reason:
-                self._log.warning("%s; left at the camera's own value" % reason)
+        refused = camera.set_controls(self._wanted)
+        if refused:
+            self._on_refused(refused)
         keep_frame_buffers(camera.width, camera.height)
-        self._update(present=True, pixel_format=camera.pixel_format, width=camera.width,
-                     height=camera.height, fps=camera.fps)
+        self._update(present=True, pixel_format='file' if camera.file else
+                     camera.pixel_format.fourcc, width=camera.width, height=camera.height,
+                     fps=camera.fps)
+
+    def _log_refused(self, refusals: Dict[int, Refusal]) -> None:
+        for refusal in refusals.values():
+            self._log.warning("%s; left at the camera's own value"
+                              % refusal.words(lambda cid: 'control 0x%08x' % cid))
 
     def _update(self, **changes) -> None:
         self._stats = replace(self._stats, **changes)
@@ -265,7 +288,7 @@ class CaptureLoop:
             if camera is None:
                 if self._reopen():
                     last_frame = self._not_before = now_fn()
-                    first = True
+                    first, self._last_index = True, None
                 continue
             frame = camera.read()
             if stopped():
@@ -279,8 +302,13 @@ class CaptureLoop:
                     failed_reads = 0
                 continue
             failed_reads = 0
+            self._count_dropped(frame.index)
             if frame.capture_time is not None and frame.capture_time < self._not_before:
                 self._stale += 1
+                continue
+            if frame.error:
+                last_frame, first = now, False   # the device is there: it is no stall
+                self._count_error()
                 continue
             if frame.corrupt:
                 self._count_corrupt()
@@ -295,6 +323,18 @@ class CaptureLoop:
                 self._count_corrupt()
                 continue
             self._frames += 1
+
+    def _count_dropped(self, index: Optional[int]) -> None:
+        """Count the frames the device's numbering skips before this one."""
+        last, self._last_index = self._last_index, index
+        if last is not None and index is not None and index > last + 1:
+            self._dropped += index - last - 1
+
+    def _count_error(self) -> None:
+        self._errors += 1
+        if self._errors == 1 or self._errors % 100 == 0:
+            self._log.warning('%s delivered a frame flagged as an error (%d so far); dropped, '
+                              'never published' % (self._name, self._errors))
 
     def _count_corrupt(self) -> None:
         self._corrupt += 1
@@ -332,18 +372,24 @@ class CaptureLoop:
                 return False
             attempt += 1
             try:
-                camera = self._open_camera()
+                with self._lock:
+                    camera = self._open_camera()
+                    if self._stop.is_set():
+                        camera.release()
+                        return False
+                    self._set_camera(camera)
+                    try:
+                        camera.start()
+                    except SourceError:
+                        self._set_camera(None)
+                        camera.release()
+                        raise
             except SourceError as error:
                 now = self._clock.now()
                 if last_log is None or now - last_log >= self._timing.log_period_s:
                     last_log = now
                     self._log.warning('reopen attempt %d failed: %s' % (attempt, error))
                 continue
-            with self._lock:
-                if self._stop.is_set():
-                    camera.release()
-                    return False
-                self._set_camera(camera)
             self._update(reconnects=self._stats.reconnects + 1)
             self._log.info('%s is back after %d attempt(s); publishing resumes' % (
                 self._name, attempt))

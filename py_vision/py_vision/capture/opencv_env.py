@@ -14,17 +14,13 @@
 
 
 """
-OpenCV as the camera layer needs it: quiet, and quick to give up on a camera that sends nothing.
+OpenCV as the camera layer needs it: quiet.
 
-OpenCV's V4L2 backend prints warnings of its own (``[ WARN:0@7.4] global cap_v4l.cpp:804
-requestBuffers ... errno=19`` at an unplug) on stderr: py_vision says what happened in its own
-words instead, so OpenCV is silenced for the life of the process before the first capture
-opens. The backend also waits up to 10 s (its default select() timeout) for a frame of a camera
-that stalled; it reads OPENCV_VIDEOIO_V4L_SELECT_TIMEOUT once, at its first wait, so the
-timeout is set here, before then, to a few frame periods.
+OpenCV prints warnings of its own on stderr (a video file its reader trips over, libjpeg's
+complaints about a corrupt JPEG being decoded): py_vision says what happened in its own words
+instead, so OpenCV is silenced for the life of the process before the first source opens.
 """
 
-import math
 import os
 
 import cv2
@@ -32,12 +28,9 @@ import cv2
 __all__ = ['prepare_opencv']
 
 
-def prepare_opencv(fps: float = 30.0) -> None:
-    """Silence OpenCV's log and bound its V4L2 read wait for a camera at fps (idempotent)."""
+def prepare_opencv() -> None:
+    """Silence OpenCV's log (idempotent)."""
     os.environ.setdefault('OPENCV_LOG_LEVEL', 'SILENT')
-    # Whole seconds: at least 1, and at least three frame periods of a slow camera.
-    seconds = max(1, math.ceil(3.0 / fps)) if fps > 0 else 10
-    os.environ.setdefault('OPENCV_VIDEOIO_V4L_SELECT_TIMEOUT', str(seconds))
     # OpenCV 4.5+ and 5.x: cv2.utils.logging; some 4.x builds only have cv2.setLogLevel.
     logging = getattr(getattr(cv2, 'utils', None), 'logging', None)
     set_level = getattr(logging, 'setLogLevel', None) or getattr(cv2, 'setLogLevel', None)

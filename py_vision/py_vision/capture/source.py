@@ -16,23 +16,27 @@
 """
 The source interface: what every frame source (V4L2, video file, synthetic) gives the camera.
 
-A source has OpenCV's VideoCapture interface for streaming (isOpened, read, set, get, release;
-formats and sizes are negotiated through set/get as with OpenCV), plus what OpenCV cannot say:
-the capture time and index of the last frame, the formats the device offers (`FrameFormat`),
-its controls (`ControlInfo`, read from the device at each call) and a way to set them by V4L2
-id, and interrupt() to end a read that waits for its frame.
+A source is configured with a pixel format, size and rate (`configure`, which answers with
+what it really gives: `StreamFormat`), streams between `start()` and `stop()` (the device
+stays open and keeps its buffers and controls in between), and hands out one `Frame` at a time
+(`next_frame`): the bytes as the device sent them, in a pixel format of the table
+(pixel_formats), with the capture time, the frame's number and whether the device flagged it.
+A frame's bytes may be the device's own buffer: they are valid until the next `next_frame()`
+(or `stop()`), which gives the buffer back. Besides, a source says what it offers
+(`FrameFormat`), its controls (`ControlInfo`, read from the device at each call) and sets
+them by V4L2 id; `interrupt()` ends a `next_frame()` waiting in another thread.
 """
 
 from dataclasses import dataclass, field
 import time
-from typing import List, Optional, Protocol, Tuple
+from typing import Dict, List, Optional, Protocol, Tuple
 
-import cv2
 import numpy as np
 from py_vision.capture.controls import ControlInfo
+from py_vision.capture.pixel_formats import find, PixelFormat
 
 __all__ = ['Clock', 'FrameFormat', 'FrameSize', 'FrameSource', 'Frame', 'MONOTONIC',
-           'SourceError']
+           'SourceError', 'StreamFormat']
 
 
 class SourceError(Exception):
@@ -69,7 +73,7 @@ class FrameSize:
 @dataclass(frozen=True)
 class FrameFormat:
     """
-    One pixel format a device offers: 'YUYV' or 'MJPG', its description and sizes.
+    One pixel format a device offers: its FourCC, its description and sizes.
 
     Most cameras offer discrete sizes and rates (`sizes`). One that scales offers any size
     within `size_range` (min width, min height, max width, max height) and one with a stepwise
@@ -116,45 +120,89 @@ def _outside_overlap(width, height, other_width, other_height):
     return width * height + other_width * other_height - 2 * overlap
 
 
+@dataclass(frozen=True)
+class StreamFormat:
+    """What a source gives once configured: format (FourCC), size, rate, row length in bytes."""
+
+    fourcc: str
+    width: int
+    height: int
+    fps: float
+    bytesperline: int = 0     # 0: the format's natural row (or compressed)
+
+    @property
+    def pixel_format(self) -> Optional[PixelFormat]:
+        """Return the format from the table, or None when py_vision does not know it."""
+        return find(self.fourcc)
+
+
 @dataclass
 class Frame:
-    """One captured frame: BGR pixels, or the camera's JPEG bytes decoded only on demand."""
+    """
+    One captured frame: the bytes as the device sent them, converted only on demand.
 
-    index: Optional[int]
+    `data` is 1-D uint8 (only the bytes the device filled); `image(output)` converts them once
+    per output (bgr8, rgb8, mono8, mono16, or native: the pixels as sent wherever a sensor_msgs
+    encoding has them), a view of `data` where no conversion is needed. A frame whose bytes
+    are not a whole image is `corrupt` (found out on receipt, or when a JPEG does not decode);
+    one the driver flagged as an error has `error` set and no data.
+    """
+
+    index: Optional[int]                    # the device's number for it (V4L2: sequence)
     capture_time: Optional[float]           # time.monotonic() of the capture, if known
+    pixel_format: PixelFormat
     width: int = 0
     height: int = 0
-    jpeg: Optional[np.ndarray] = None      # 1-D uint8, the camera's own bytes (MJPEG)
-    _bgr: Optional[np.ndarray] = field(default=None, repr=False)
-    decoded: bool = False                   # bgr() had to decode the JPEG
+    data: Optional[np.ndarray] = None
+    bytesperline: int = 0
+    error: bool = False                     # flagged by the driver (V4L2_BUF_FLAG_ERROR)
     corrupt: bool = False                   # not a whole image: never to be published
+    decoded: bool = False                   # image() had to decode a JPEG
+    _images: Dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+
+    @property
+    def jpeg(self) -> Optional[np.ndarray]:
+        """Return the camera's own JPEG bytes (MJPEG), or None for a raw frame."""
+        return self.data if self.pixel_format.jpeg else None
+
+    def encoding(self, output: str) -> str:
+        """Return the sensor_msgs encoding image(output) is in."""
+        return self.pixel_format.native_encoding if output == 'native' else output
+
+    def image(self, output: str = 'bgr8') -> Optional[np.ndarray]:
+        """Return the frame as `output` (see the class's text); None if it is not a picture."""
+        image = self._images.get(output)
+        if image is not None or self.corrupt or self.data is None:
+            return image
+        pixel_format = self.pixel_format
+        view = pixel_format.view(self.data, self.width, self.height, self.bytesperline)
+        image = pixel_format.convert(view, output)
+        if pixel_format.compressed:
+            self.decoded = True
+            self.corrupt = image is None
+        self._images[output] = image
+        return image
 
     def bgr(self) -> Optional[np.ndarray]:
         """Return the frame as a BGR image (decoding the camera's JPEG once); None if corrupt."""
-        if self._bgr is None and self.jpeg is not None and not self.decoded:
-            self.decoded = True
-            self._bgr = cv2.imdecode(self.jpeg, cv2.IMREAD_COLOR)
-            self.corrupt = self._bgr is None
-        return self._bgr
+        return self.image('bgr8')
 
 
 class FrameSource(Protocol):
-    """What the camera layer uses from a frame source."""
+    """What the camera layer uses from a frame source (see the module's text)."""
 
-    last_index: Optional[int]          # source frame number of the last frame read, if known
-    last_capture_time: Optional[float]  # its capture time, time.monotonic(), if known
+    def configure(self, pixel_format: PixelFormat, width: int, height: int,  # noqa: D102
+                  fps: float) -> StreamFormat: ...
 
-    def isOpened(self) -> bool: ...  # noqa: N802, D102 (OpenCV's interface)
+    def start(self) -> None: ...  # noqa: D102
 
-    def read(self) -> Tuple[bool, Optional[np.ndarray]]: ...  # noqa: D102
+    def stop(self) -> None: ...  # noqa: D102
 
-    def set(self, prop_id: int, value: float) -> bool: ...  # noqa: A003, D102
-
-    def get(self, prop_id: int) -> float: ...  # noqa: D102
-
-    def release(self) -> None: ...  # noqa: D102
+    def next_frame(self) -> Optional[Frame]: ...  # noqa: D102
 
     def interrupt(self) -> None: ...  # noqa: D102
+
+    def release(self) -> None: ...  # noqa: D102
 
     def formats(self) -> List[FrameFormat]: ...  # noqa: D102
 

@@ -23,12 +23,16 @@ with ``cv2.COLOR_YUV2BGR_YUYV`` as OpenCV's V4L2 backend does, and paces frames 
 with a single buffer: a caller that falls behind gets the newest frame and the frames in between
 are lost (their indices are skipped). read() returns a new array every time.
 
-It offers two pixel formats. YUYV is limited by the bus to 24 MB/s: the highest of 30, 25, 20,
-15, 10 and 5 fps whose ``width * height * 2`` bytes fit (640x480 at 30, 1280x720 at 10,
-1920x1080 at 5 fps). MJPEG runs at the requested rate at any size. The FOURCC is chosen with
-``set(CAP_PROP_FOURCC)`` and, as in OpenCV's V4L2 backend, YUYV is the format a camera opens
-with; with ``CAP_PROP_CONVERT_RGB`` off in MJPEG mode, read() returns the camera's JPEG bytes as
-a 1-D uint8 array, otherwise a BGR image.
+It offers what a USB webcam offers (`UVC_WEBCAM` of the pixel format table: YUYV and MJPEG),
+or any formats of the table it is asked for. A raw format is limited by the bus to 24 MB/s:
+the highest of 30, 25, 20, 15, 10 and 5 fps whose frames fit (YUYV, two bytes a pixel:
+640x480 at 30, 1280x720 at 10, 1920x1080 at 5 fps); a compressed one runs at the requested rate
+at any size. Raw frames are made from its YUYV picture the way the table says
+(`PixelFormat.from_yuyv`). The FOURCC is chosen with ``set(CAP_PROP_FOURCC)`` and, as in
+OpenCV's V4L2 backend, the first format offered is the one it opens with; with
+``CAP_PROP_CONVERT_RGB`` off read() returns the buffer as the camera sent it (a 1-D uint8
+array: the JPEG's bytes in MJPEG mode), otherwise a BGR image. As a FrameSource (`configure`,
+`next_frame`, ...) it hands out the buffer as sent.
 
 Its controls (`CONTROLS`, a ControlInfo table with V4L2 ids and names as uvcvideo reports them)
 are read with controls() and set with set_control() (and, as OpenCV does, through the
@@ -38,11 +42,11 @@ camera, a control an automatic mode owns is inactive while that mode is on.
 Faults for tests, as constructor options or in a ``video_device`` string
 (`SyntheticDevices.open`): ``fail_open`` (never opens), ``stop_after`` (unplugged after N
 frames), ``unplugged_for`` (reopening works again that many seconds after the unplug) and
-``fail_every`` (every K-th read fails while the device stays open); ``formats`` restricts what
-the camera offers (``synthetic?formats=yuyv``, ``mjpeg`` or ``yuyv,mjpeg``). Cameras opened
-through one `SyntheticDevices` with the same name and options share one state: the frame index
-and an unplug carry over to the next camera opened with them. The devices' clock is a
-constructor argument (a fake one in tests).
+``fail_every`` (every K-th read fails while the device stays open); ``formats`` says what
+the camera offers, by FourCC (``synthetic?formats=grey`` or ``yuyv,mjpg``).
+Cameras opened through one `SyntheticDevices` with the same name and options share one state:
+the frame index and an unplug carry over to the next camera opened with them. The devices'
+clock is a constructor argument (a fake one in tests).
 """
 
 import math
@@ -53,18 +57,16 @@ from urllib.parse import parse_qsl
 import cv2
 import numpy as np
 from py_vision.capture.controls import (
-    BOOL, CID, ControlInfo, EXPOSURE_APERTURE_PRIORITY, EXPOSURE_MANUAL, INT, MENU, OWNED_BY)
+    BOOL, CID, ControlInfo, EXPOSURE_APERTURE_PRIORITY, EXPOSURE_MANUAL, holder, INT, MENU)
 from py_vision.capture.pacing import FramePacer
-from py_vision.capture.source import Clock, FrameFormat, FrameSize, MONOTONIC
+from py_vision.capture.pixel_formats import find, FORMATS, PixelFormat, UVC_WEBCAM
+from py_vision.capture.source import (
+    Clock, Frame, FrameFormat, FrameSize, MONOTONIC, StreamFormat)
 from py_vision.capture.synthetic_picture import (
     apply_controls, frame_layout, mjpeg_encoder, yuyv_to_bgr)
 
 MAX_SIZE = 8192
 MAX_FPS = 1000.0
-FOURCC_YUYV = float(cv2.VideoWriter_fourcc(*'YUYV'))
-FOURCC_MJPG = float(cv2.VideoWriter_fourcc(*'MJPG'))
-FORMATS = {'yuyv': FOURCC_YUYV, 'mjpeg': FOURCC_MJPG}
-_FORMAT_INFO = {'yuyv': ('YUYV', 'YUYV 4:2:2'), 'mjpeg': ('MJPG', 'Motion-JPEG')}
 # USB 2.0 high speed carries about 24 MB/s of isochronous video; UVC cameras offer these rates.
 BUS_BYTES_PER_S = 24e6
 UVC_RATES = (30.0, 25.0, 20.0, 15.0, 10.0, 5.0)
@@ -100,13 +102,14 @@ _PROPS = {
     cv2.CAP_PROP_FOCUS: CID.FOCUS_ABSOLUTE, cv2.CAP_PROP_AUTOFOCUS: CID.FOCUS_AUTO,
 }
 _DEFAULTS = {control.cid: control.default for control in CONTROLS}
-_NEUTRAL = {control.name: control.default for control in CONTROLS}
 
 
-def yuyv_max_fps(width, height):
-    """Return the highest UVC rate at which YUYV frames of this size fit the USB 2.0 bus."""
+def bus_max_fps(pixel_format: PixelFormat, width: int, height: int) -> float:
+    """Return the highest UVC rate at which frames of a format fit the USB 2.0 bus."""
+    if pixel_format.compressed:
+        return UVC_RATES[0]
     for rate in UVC_RATES:
-        if width * height * 2 * rate <= BUS_BYTES_PER_S:
+        if width * height * pixel_format.bus_bytes * rate <= BUS_BYTES_PER_S:
             return rate
     return UVC_RATES[-1]
 
@@ -176,12 +179,12 @@ class SyntheticCamera:
     `last_index` is the frame index of the image the last successful read() returned and
     `last_capture_time` the time.monotonic() at which it was captured (its due time; earlier
     than the read's return when the caller was late). `error` says why the device is not
-    open, or why its reads fail, or is None. `formats` names the pixel formats it offers
-    (keys of FORMATS); it opens in YUYV where it offers it, as OpenCV's V4L2 backend does.
+    open, or why its reads fail, or is None. `formats` names the pixel formats it offers (by
+    FourCC); it opens in the first of them.
     """
 
     def __init__(self, width=640, height=480, fps=10.0, *, fail_open=False, stop_after=None,
-                 unplugged_for=None, fail_every=None, formats=('yuyv', 'mjpeg'),
+                 unplugged_for=None, fail_every=None, formats=UVC_WEBCAM,
                  name='synthetic', devices: Optional[SyntheticDevices] = None):
         w, h, rate = _check_size(width), _check_size(height), _check_fps(fps)
         if w is None or h is None:
@@ -196,8 +199,8 @@ class SyntheticCamera:
                              % (unplugged_for,))
         if fail_every is not None and (int(fail_every) != fail_every or fail_every < 1):
             raise ValueError('fail_every must be an integer >= 1, got %r' % (fail_every,))
-        unknown = [f for f in formats if f not in FORMATS]
-        if unknown or not formats:
+        offered = [find(name) for name in formats]
+        if None in offered or not formats:
             raise ValueError('formats must be one or more of %s, got %s'
                              % (', '.join(FORMATS), ','.join(formats) or 'none'))
         self.name = name
@@ -207,8 +210,8 @@ class SyntheticCamera:
         self.last_capture_time = None
         self.error = None
         self._width, self._height = max(2, w & ~1), h
-        self._offered = [FORMATS[f] for f in FORMATS if f in formats]
-        self._fourcc = self._offered[0]
+        self._offered = list(dict.fromkeys(offered))
+        self._format = self._offered[0]
         self._convert_rgb = True
         self._controls = dict(_DEFAULTS)
         self._requested_fps = rate
@@ -222,7 +225,7 @@ class SyntheticCamera:
         self._buf = None
         self._rendered = None
         self._state = self._devices.state((name, stop_after, unplugged_for, fail_every,
-                                           tuple(formats)))
+                                           tuple(f.fourcc for f in self._offered)))
         self._opened = not fail_open
         if fail_open:
             self.error = 'the device does not open (fail_open)'
@@ -296,30 +299,36 @@ class SyntheticCamera:
 
     def retrieve(self, image=None, flag=0):
         """
-        Return the grabbed frame (a new array each call).
+        Return the grabbed frame.
 
-        A BGR image, or with CAP_PROP_CONVERT_RGB off the buffer as the camera sent it, as a
-        1-D uint8 array: the JPEG bytes in MJPEG mode, the packed YUYV bytes in YUYV mode.
+        A BGR image (a new array each call), or with CAP_PROP_CONVERT_RGB off the buffer as the
+        camera sent it, as a 1-D uint8 array (the JPEG's bytes in MJPEG mode): the camera's own
+        buffer, valid until the next grab.
         """
         if self._grabbed is None or not self._opened:
             return False, None
+        data = self._sent()
+        if not self._convert_rgb:
+            return True, data
+        pixel_format = self._format
+        view = pixel_format.view(data, self._width, self._height)
+        image = pixel_format.convert(view, 'bgr8')
+        return True, image.copy() if image is view else image
+
+    def _sent(self):
+        """Return the grabbed frame's bytes as the camera sends them in its format (1-D)."""
         if self._rendered != self._grabbed:
             self._render(self._grabbed)
-        yuyv = apply_controls(self._buf, {_CONTROL_OF[cid].name: value for cid, value
-                                          in self._controls.items()}, _NEUTRAL)
-        if self._fourcc == FOURCC_YUYV:
-            if self._convert_rgb:
-                return True, yuyv_to_bgr(yuyv)
-            return True, yuyv.reshape(-1).copy()
-        encoder = mjpeg_encoder(self._width, self._height)
-        if yuyv is self._buf:
-            jpeg = encoder.encode(self._grabbed, yuyv)
-        else:  # controls changed the whole picture: no cached rows apply
-            jpeg = encoder.encode_whole(yuyv_to_bgr(yuyv))
-        data = np.frombuffer(jpeg, np.uint8)
-        if self._convert_rgb:
-            return True, cv2.imdecode(data, cv2.IMREAD_COLOR)
-        return True, data.copy()
+        yuyv = apply_controls(self._buf, self._controls, _DEFAULTS)
+        pixel_format = self._format
+        if pixel_format.compressed:
+            encoder = mjpeg_encoder(self._width, self._height)
+            if yuyv is self._buf:
+                jpeg = encoder.encode(self._grabbed, yuyv)
+            else:  # controls changed the whole picture: no cached rows apply
+                jpeg = encoder.encode_whole(yuyv_to_bgr(yuyv))
+            return np.frombuffer(jpeg, np.uint8)
+        return np.ascontiguousarray(pixel_format.from_yuyv(yuyv)).reshape(-1).view(np.uint8)
 
     def _render(self, index):
         layout = frame_layout(self._width, self._height)
@@ -335,38 +344,59 @@ class SyntheticCamera:
             return False, None
         return self.retrieve()
 
+    # --- as a FrameSource (what the camera layer uses) ---------------------------------
+
+    def configure(self, pixel_format: PixelFormat, width: int, height: int,
+                  fps: float) -> StreamFormat:
+        """Ask for a format, size and rate as a driver is asked; return what it gives."""
+        self.set(cv2.CAP_PROP_FOURCC, pixel_format.code)
+        self.set(cv2.CAP_PROP_FRAME_WIDTH, width)
+        self.set(cv2.CAP_PROP_FRAME_HEIGHT, height)
+        self.set(cv2.CAP_PROP_FPS, fps)
+        self._convert_rgb = False
+        return StreamFormat(self._format.fourcc, self._width, self._height, self._pacer.fps,
+                            self._format.bytesperline(self._width))
+
+    def start(self) -> None:
+        """Stream: frames come from the next next_frame() on."""
+
+    def stop(self) -> None:
+        """Stop streaming: the next frame starts a new schedule (the ones between are missed)."""
+        self._pacer.restart()
+
+    def next_frame(self) -> Optional[Frame]:
+        """Wait for the next frame; return it as sent (valid until the next call), or None."""
+        if not self.grab():
+            return None
+        pixel_format = self._format
+        return Frame(self.last_index, self.last_capture_time, pixel_format, self._width,
+                     self._height, self._sent(), pixel_format.bytesperline(self._width))
+
     def _rate(self):
-        """Return the frame rate the camera gives: YUYV is limited by the bus, MJPEG is not."""
-        if self._fourcc == FOURCC_YUYV:
-            return min(self._requested_fps, yuyv_max_fps(self._width, self._height))
-        return self._requested_fps
+        """Return the frame rate the camera gives: a raw format's is limited by the bus."""
+        if self._format.compressed:
+            return self._requested_fps
+        return min(self._requested_fps, bus_max_fps(self._format, self._width, self._height))
 
     def formats(self) -> List[FrameFormat]:
         """Return the formats it offers at its listed sizes, with the rates each reaches."""
         found = []
-        for name in FORMATS:
-            if FORMATS[name] not in self._offered:
-                continue
+        for pixel_format in self._offered:
             sizes = []
             for width, height in LISTED_SIZES:
-                top = yuyv_max_fps(width, height) if name == 'yuyv' else UVC_RATES[0]
+                top = bus_max_fps(pixel_format, width, height)
                 sizes.append(FrameSize(width, height, tuple(r for r in UVC_RATES if r <= top)))
-            # A scaler: any size; MJPEG at any rate, YUYV at the rates the bus carries.
-            found.append(FrameFormat(*_FORMAT_INFO[name], tuple(sizes),
-                                     (2, 1, MAX_SIZE, MAX_SIZE),
-                                     (0.1, MAX_FPS) if name == 'mjpeg' else None))
+            # A scaler: any size; a compressed format at any rate, raw ones at the bus's rates.
+            found.append(FrameFormat(pixel_format.fourcc, pixel_format.description,
+                                     tuple(sizes), (2, 1, MAX_SIZE, MAX_SIZE),
+                                     (0.1, MAX_FPS) if pixel_format.compressed else None))
         return found
 
     def controls(self) -> List[ControlInfo]:
-        """Return the camera's controls with their values; owned ones inactive in auto mode."""
-        found = []
-        for control in CONTROLS:
-            inactive = False
-            if control.cid in OWNED_BY:
-                owner, freeing = OWNED_BY[control.cid]
-                inactive = self._controls[owner] not in freeing
-            found.append(control.with_value(self._controls[control.cid], inactive))
-        return found
+        """Return the camera's controls with their values; held ones inactive in auto mode."""
+        return [control.with_value(self._controls[control.cid],
+                                   holder(control.cid, self._controls) is not None)
+                for control in CONTROLS]
 
     def set_control(self, cid: int, value: int) -> Optional[str]:
         """Set a control as a driver does; return why it was refused, or None."""
@@ -385,8 +415,8 @@ class SyntheticCamera:
         """
         Set a property like a V4L2 driver; False for what the camera refuses.
 
-        Width and height (an odd width is rounded down), fps (YUYV is capped by the bus),
-        FOURCC (YUYV or MJPG where offered), CONVERT_RGB and the controls within their range.
+        Width and height (an odd width is rounded down), fps (a raw format is capped by the
+        bus), FOURCC (one offered), CONVERT_RGB and the controls within their range.
         """
         if not self._opened:
             return False
@@ -400,9 +430,10 @@ class SyntheticCamera:
             self._convert_rgb = bool(value)
             return True
         if prop_id == cv2.CAP_PROP_FOURCC:
-            if value not in self._offered:
+            chosen = next((f for f in self._offered if f.code == value), None)
+            if chosen is None:
                 return False
-            changed, self._fourcc = value != self._fourcc, float(value)
+            changed, self._format = chosen is not self._format, chosen
         elif prop_id in (cv2.CAP_PROP_FRAME_WIDTH, cv2.CAP_PROP_FRAME_HEIGHT):
             size = _check_size(value)
             if size is None:
@@ -438,7 +469,7 @@ class SyntheticCamera:
         if prop_id == cv2.CAP_PROP_FPS:
             return float(self._pacer.fps)
         if prop_id == cv2.CAP_PROP_FOURCC:
-            return self._fourcc
+            return float(self._format.code)
         if prop_id == cv2.CAP_PROP_CONVERT_RGB:
             return 1.0 if self._convert_rgb else 0.0
         if prop_id in _PROPS:
@@ -490,9 +521,8 @@ def parse_synthetic_spec(spec):
         elif key == 'unplugged_for':
             options[key] = _parse_number(key, value, float, 0)
         elif key == 'formats':
-            options[key] = tuple(f.strip().lower() for f in value.split(',') if f.strip())
-            unknown = [f for f in options[key] if f not in FORMATS]
-            if unknown or not options[key]:
+            options[key] = tuple(f.strip() for f in value.split(',') if f.strip())
+            if not options[key] or any(find(f) is None for f in options[key]):
                 raise ValueError('formats must be a comma-separated list of %s, got "%s"'
                                  % (', '.join(FORMATS), value))
         else:

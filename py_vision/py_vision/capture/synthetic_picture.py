@@ -36,6 +36,7 @@ import re
 
 import cv2
 import numpy as np
+from py_vision.capture.controls import CID, EXPOSURE_MANUAL
 
 MIN_CODE_SIZE = (64, 48)
 JPEG_QUALITY = 90
@@ -231,7 +232,7 @@ def apply_controls(yuyv, values, neutral):
     """
     Return the YUYV buffer as the camera's controls make it look (the same array at neutral).
 
-    `values` and `neutral` (the camera's defaults) map control names to values. Luma is
+    `values` and `neutral` (the camera's defaults) map V4L2 control ids to values. Luma is
     offset by brightness, scaled around mid-grey by contrast and brightened by gain and, with
     auto exposure manual (1), by exposure time; chroma is scaled by saturation and, with
     automatic white balance off, shifted by the temperature (lower temperatures bluer);
@@ -240,24 +241,24 @@ def apply_controls(yuyv, values, neutral):
     """
     if values == neutral:
         return yuyv
-    v = values
+    v, n = values, neutral
     luma = yuyv[:, :, 0].astype(np.float32)
     chroma = yuyv[:, :, 1].astype(np.float32)
-    gain = 1.0 + v['gain'] / 100.0
-    if v['auto_exposure'] == 1:
-        gain *= v['exposure_time_absolute'] / float(neutral['exposure_time_absolute'])
-    luma = (luma - 128.0) * (v['contrast'] / float(neutral['contrast'])) + 128.0 \
-        + v['brightness']
+    gain = 1.0 + v[CID.GAIN] / 100.0
+    if v[CID.EXPOSURE_AUTO] == EXPOSURE_MANUAL:
+        gain *= v[CID.EXPOSURE_ABSOLUTE] / float(n[CID.EXPOSURE_ABSOLUTE])
+    luma = (luma - 128.0) * (v[CID.CONTRAST] / float(n[CID.CONTRAST])) + 128.0 \
+        + v[CID.BRIGHTNESS]
     luma = (luma - 16.0) * gain + 16.0
-    blur = v['focus_absolute'] / 25.0 if v['focus_automatic_continuous'] == 0 else 0.0
+    blur = v[CID.FOCUS_ABSOLUTE] / 25.0 if v[CID.FOCUS_AUTO] == 0 else 0.0
     if blur > 0:
         luma = cv2.GaussianBlur(luma, (0, 0), blur)
-    if v['sharpness'] != neutral['sharpness']:
+    if v[CID.SHARPNESS] != n[CID.SHARPNESS]:
         soft = cv2.GaussianBlur(luma, (0, 0), 1.5)
-        luma = luma + (luma - soft) * ((v['sharpness'] - neutral['sharpness']) / 3.0)
-    chroma = (chroma - 128.0) * (v['saturation'] / float(neutral['saturation'])) + 128.0
-    if v['white_balance_automatic'] == 0:
-        shift = (neutral['white_balance_temperature'] - v['white_balance_temperature']) / 50.0
+        luma = luma + (luma - soft) * ((v[CID.SHARPNESS] - n[CID.SHARPNESS]) / 3.0)
+    chroma = (chroma - 128.0) * (v[CID.SATURATION] / float(n[CID.SATURATION])) + 128.0
+    if v[CID.AUTO_WHITE_BALANCE] == 0:
+        shift = (n[CID.WHITE_BALANCE_TEMPERATURE] - v[CID.WHITE_BALANCE_TEMPERATURE]) / 50.0
         chroma[:, 0::2] += shift   # U: bluer below the default temperature
         chroma[:, 1::2] -= shift   # V: less red
     out = np.empty_like(yuyv)

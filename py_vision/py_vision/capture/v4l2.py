@@ -14,28 +14,30 @@
 
 
 """
-V4L2 cameras: the device's own answers through ioctls, and OpenCV streaming the frames.
+V4L2 devices: what they are and offer, and their controls, asked through ioctls.
 
-`V4L2Device` asks the driver directly (fcntl.ioctl, struct layouts of linux/videodev2.h) for
-what OpenCV has no call for: what the device is (QUERYCAP), the pixel formats, frame sizes and
-frame intervals it offers (ENUM_FMT, ENUM_FRAMESIZES, ENUM_FRAMEINTERVALS), and every control
-(QUERY_EXT_CTRL walking V4L2_CTRL_FLAG_NEXT_CTRL, or QUERYCTRL on old drivers; QUERYMENU;
-G_CTRL and S_CTRL). `V4L2Source` is an OpenCV capture of the same device (OpenCV's V4L2
-backend streams the frames) with such a device beside it for everything else.
+`V4L2Device` asks the driver directly (fcntl.ioctl, struct layouts of linux/videodev2.h):
+what the device is (QUERYCAP), the pixel formats, frame sizes and frame intervals it offers
+(ENUM_FMT, ENUM_FRAMESIZES, ENUM_FRAMEINTERVALS), and every control of every type
+(QUERY_EXT_CTRL walking V4L2_CTRL_FLAG_NEXT_CTRL and NEXT_COMPOUND, or QUERYCTRL on old
+drivers; QUERYMENU; G_CTRL and S_CTRL, G_EXT_CTRLS and S_EXT_CTRLS for 64-bit values).
+Streaming the frames is v4l2_stream's.
 """
 
+import ctypes
 import errno
 import fcntl
 import os
 import struct
-import time
-from typing import List, Optional, Tuple
+from typing import List, Optional
 
-import cv2
-from py_vision.capture.controls import BOOL, ControlInfo, INT, MENU
+from py_vision.capture.controls import (
+    ARRAY, BITMASK, BOOL, BUTTON, COMPOUND, ControlInfo, INT, INT64, INT_MENU, MENU, SETTABLE,
+    STRING)
+from py_vision.capture.pixel_formats import fourcc_text
 from py_vision.capture.source import FrameFormat, FrameSize
 
-__all__ = ['V4L2Device', 'V4L2Error', 'V4L2Source', 'fourcc_text']
+__all__ = ['open_problem', 'V4L2Device', 'V4L2Error']
 
 
 def _ioc(direction, number, size):
@@ -63,6 +65,26 @@ _QUERYCTRL = struct.Struct('=II32siiiiI8x')
 _QUERYMENU = struct.Struct('=II32sI')
 # struct v4l2_control: id value.
 _CONTROL = struct.Struct('=Ii')
+
+
+class _ExtValue(ctypes.Union):
+    _fields_ = [('value', ctypes.c_int32), ('value64', ctypes.c_int64)]
+
+
+class _ExtControl(ctypes.Structure):
+    # struct v4l2_ext_control (packed): id size reserved2[1], then the value's union.
+    _pack_ = 1
+    _fields_ = [('id', ctypes.c_uint32), ('size', ctypes.c_uint32),
+                ('reserved2', ctypes.c_uint32), ('u', _ExtValue)]
+
+
+class _ExtControls(ctypes.Structure):
+    # struct v4l2_ext_controls: which count error_idx request_fd reserved[1] controls.
+    _fields_ = [('which', ctypes.c_uint32), ('count', ctypes.c_uint32),
+                ('error_idx', ctypes.c_uint32), ('request_fd', ctypes.c_int32),
+                ('reserved', ctypes.c_uint32), ('controls', ctypes.POINTER(_ExtControl))]
+
+
 # struct v4l2_requestbuffers: count type memory capabilities flags reserved[3].
 _REQBUFS = struct.Struct('=IIIIB3x')
 
@@ -73,6 +95,8 @@ VIDIOC_G_CTRL = _ioc(_READ_WRITE, 27, _CONTROL.size)
 VIDIOC_S_CTRL = _ioc(_READ_WRITE, 28, _CONTROL.size)
 VIDIOC_QUERYCTRL = _ioc(_READ_WRITE, 36, _QUERYCTRL.size)
 VIDIOC_QUERYMENU = _ioc(_READ_WRITE, 37, _QUERYMENU.size)
+VIDIOC_G_EXT_CTRLS = _ioc(_READ_WRITE, 71, ctypes.sizeof(_ExtControls))
+VIDIOC_S_EXT_CTRLS = _ioc(_READ_WRITE, 72, ctypes.sizeof(_ExtControls))
 VIDIOC_ENUM_FRAMESIZES = _ioc(_READ_WRITE, 74, _FRMSIZE.size)
 VIDIOC_ENUM_FRAMEINTERVALS = _ioc(_READ_WRITE, 75, _FRMIVAL.size)
 VIDIOC_QUERY_EXT_CTRL = _ioc(_READ_WRITE, 103, _EXT_CTRL.size)
@@ -87,23 +111,29 @@ CTRL_FLAG_DISABLED = 0x0001
 CTRL_FLAG_READ_ONLY = 0x0004
 CTRL_FLAG_INACTIVE = 0x0010
 CTRL_FLAG_WRITE_ONLY = 0x0040
+CTRL_FLAG_DYNAMIC_ARRAY = 0x0800
 CTRL_FLAG_NEXT_CTRL = 0x80000000
 CTRL_FLAG_NEXT_COMPOUND = 0x40000000
-_CTRL_TYPES = {1: INT, 2: BOOL, 3: MENU}   # integer, boolean, menu: what a parameter can be
-_POS_MSEC = cv2.CAP_PROP_POS_MSEC           # read once per frame: the driver's buffer time
+# enum v4l2_ctrl_type; from 0x100 on the compound types (U8, U16, U32 are arrays' elements).
+_CTRL_TYPES = {1: INT, 2: BOOL, 3: MENU, 4: BUTTON, 5: INT64, 7: STRING, 8: BITMASK,
+               9: INT_MENU}
+_COMPOUND_TYPES, _ELEMENT_TYPES = 0x0100, (0x0100, 0x0101, 0x0102)
 _CTRL_CLASS_TYPE = 6
 # A stepwise or continuous size range is offered at these common sizes.
 _COMMON_SIZES = ((160, 120), (320, 240), (640, 480), (800, 600), (1024, 768), (1280, 720),
                  (1280, 960), (1600, 1200), (1920, 1080), (2560, 1440), (3840, 2160))
 
 
-def fourcc_text(code: int) -> str:
-    """Return a FOURCC code as its four characters: 0x56595559 -> 'YUYV'."""
-    return ''.join(chr((int(code) >> shift) & 0xFF) for shift in (0, 8, 16, 24)).strip('\0 ')
-
-
 def _text(raw: bytes) -> str:
     return raw.split(b'\0', 1)[0].decode('utf-8', 'replace').strip()
+
+
+def _kind(kind: int, dims: int, flags: int) -> str:
+    """Return what a control is, from its V4L2 type, its number of dimensions and flags."""
+    if dims or flags & CTRL_FLAG_DYNAMIC_ARRAY or kind in _ELEMENT_TYPES:
+        return ARRAY
+    # A type newer than this code carries a payload too: not a number to set.
+    return _CTRL_TYPES.get(kind, COMPOUND)
 
 
 class V4L2Error(Exception):
@@ -132,6 +162,7 @@ class V4L2Device:
 
     def __init__(self, path: str):
         self.path = path
+        self._kinds = {}   # control id -> kind, as controls() last found them
         try:
             self.fd = os.open(path, os.O_RDWR | os.O_NONBLOCK)
         except OSError as error:
@@ -141,6 +172,7 @@ class V4L2Device:
         except V4L2Error:
             self.close()
             raise
+        self.caps = caps
         if not caps & (CAP_VIDEO_CAPTURE | CAP_VIDEO_CAPTURE_MPLANE):
             self.close()
             raise V4L2Error('not a video capture device (%s has no capture capability)'
@@ -245,19 +277,21 @@ class V4L2Device:
     # --- controls -------------------------------------------------------------------
 
     def controls(self) -> List[ControlInfo]:
-        """Return every integer, boolean and menu control, with its current value."""
+        """Return every control, of every type, with its value where one number holds it."""
         try:
             queried = list(self._walk_ext())
         except OSError:
             queried = list(self._walk_old())  # a driver without VIDIOC_QUERY_EXT_CTRL
         found = []
         for cid, kind, label, low, high, step, default, flags in queried:
-            if flags & CTRL_FLAG_DISABLED or kind not in _CTRL_TYPES:
+            if flags & CTRL_FLAG_DISABLED:
                 continue
-            kind = _CTRL_TYPES[kind]
-            menu = tuple(self._menu(cid, low, high)) if kind == MENU else ()
+            if kind == BITMASK:   # the old ioctl's 32 bits are signed
+                high, default = high & 0xFFFFFFFF, default & 0xFFFFFFFF
+            self._kinds[cid] = kind
+            menu = tuple(self._menu(cid, low, high, kind)) if kind in (MENU, INT_MENU) else ()
             value = None
-            if not flags & CTRL_FLAG_WRITE_ONLY:
+            if kind in SETTABLE and kind != BUTTON and not flags & CTRL_FLAG_WRITE_ONLY:
                 value = self.get_control(cid)
             found.append(ControlInfo(
                 cid, label, kind, int(low), int(high), max(int(step), 1), int(default), value,
@@ -266,21 +300,24 @@ class V4L2Device:
         return found
 
     def _walk_ext(self):
-        cid = CTRL_FLAG_NEXT_CTRL
+        # NEXT_CTRL alone skips arrays and compound types: both flags walk every control.
+        walk = CTRL_FLAG_NEXT_CTRL | CTRL_FLAG_NEXT_COMPOUND
+        cid = walk
         while True:
             buffer = bytearray(_EXT_CTRL.size)
             struct.pack_into('=I', buffer, 0, cid)
             try:
                 self._ioctl(VIDIOC_QUERY_EXT_CTRL, buffer)
             except OSError as error:
-                if error.errno == errno.EINVAL and cid != CTRL_FLAG_NEXT_CTRL:
+                if error.errno == errno.EINVAL and cid != walk:
                     return  # past the last control
                 raise
             (found, kind, name, low, high, step, default, flags,
-             _, _, _) = _EXT_CTRL.unpack(buffer)
+             _, _, dims) = _EXT_CTRL.unpack(buffer)
             if kind != _CTRL_CLASS_TYPE:
-                yield found, kind, _text(name), low, high, step, default, flags
-            cid = found | CTRL_FLAG_NEXT_CTRL
+                yield (found, _kind(kind, dims, flags), _text(name), low, high, step, default,
+                       flags)
+            cid = found | walk
 
     def _walk_old(self):
         cid = CTRL_FLAG_NEXT_CTRL
@@ -292,31 +329,51 @@ class V4L2Device:
                 return
             found, kind, name, low, high, step, default, flags = _QUERYCTRL.unpack(buffer)
             if kind != _CTRL_CLASS_TYPE:
-                yield found, kind, _text(name), low, high, step, default, flags
+                yield found, _kind(kind, 0, flags), _text(name), low, high, step, default, flags
             cid = found | CTRL_FLAG_NEXT_CTRL
 
-    def _menu(self, cid, low, high):
+    def _menu(self, cid, low, high, kind):
+        """Yield (index, label) of each entry; an integer menu's label is its value."""
         for index in range(int(low), int(high) + 1):
             buffer = bytearray(_QUERYMENU.pack(cid, index, b'', 0))
             try:
                 self._ioctl(VIDIOC_QUERYMENU, buffer)
             except OSError:
                 continue  # a value the menu skips
-            yield index, _text(_QUERYMENU.unpack(buffer)[2])
+            if kind == INT_MENU:
+                yield index, str(struct.unpack_from('=q', buffer, 8)[0])
+            else:
+                yield index, _text(_QUERYMENU.unpack(buffer)[2])
+
+    def _ext_control(self, request, cid: int, value: int = 0) -> int:
+        """Get or set one 64-bit control through the EXT_CTRLS ioctls; return its value."""
+        item = _ExtControl(id=cid)
+        item.u.value64 = value
+        self._ioctl(request, _ExtControls(count=1, controls=ctypes.pointer(item)))
+        return item.u.value64
 
     def get_control(self, cid: int) -> Optional[int]:
         """Return a control's current value, or None when the device does not say."""
-        buffer = bytearray(_CONTROL.pack(cid, 0))
+        kind = self._kinds.get(cid)
         try:
-            self._ioctl(VIDIOC_G_CTRL, buffer)
+            if kind == INT64:
+                return self._ext_control(VIDIOC_G_EXT_CTRLS, cid)
+            buffer = self._ioctl(VIDIOC_G_CTRL, bytearray(_CONTROL.pack(cid, 0)))
         except OSError:
             return None
-        return _CONTROL.unpack(buffer)[1]
+        value = _CONTROL.unpack(buffer)[1]
+        return value & 0xFFFFFFFF if kind == BITMASK else value
 
     def set_control(self, cid: int, value: int) -> Optional[str]:
-        """Set a control; return None, or why the device refused, in words."""
+        """Set a control (press a button); return None, or why the device refused, in words."""
+        value = int(value)
         try:
-            self._ioctl(VIDIOC_S_CTRL, bytearray(_CONTROL.pack(cid, int(value))))
+            if self._kinds.get(cid) == INT64:
+                self._ext_control(VIDIOC_S_EXT_CTRLS, cid, value)
+            else:
+                # A bitmask's top bit is the sign of the ioctl's 32-bit value.
+                signed = value - (1 << 32) if value >= 1 << 31 else value
+                self._ioctl(VIDIOC_S_CTRL, bytearray(_CONTROL.pack(cid, signed)))
         except OSError as error:
             if error.errno == errno.EACCES:
                 return 'the device refuses it now (read-only or inactive)'
@@ -324,84 +381,3 @@ class V4L2Device:
                 return "out of the device's range"
             return 'the device refused it: %s' % os.strerror(error.errno)
         return None
-
-    def busy(self) -> bool:
-        """Return True when another handle is streaming from the device (REQBUFS says EBUSY)."""
-        try:
-            self._ioctl(VIDIOC_REQBUFS, bytearray(_REQBUFS.pack(
-                0, BUF_TYPE_VIDEO_CAPTURE, MEMORY_MMAP, 0, 0)))
-        except OSError as error:
-            return error.errno == errno.EBUSY
-        return False
-
-
-class V4L2Source:
-    """A V4L2 camera opened by OpenCV, with the driver's capture times and the device beside."""
-
-    def __init__(self, cap, device: V4L2Device):
-        self._cap = cap
-        self.device = device
-        self.last_index = None
-        self.last_capture_time = None
-
-    def isOpened(self):  # noqa: N802 (OpenCV's name)
-        """Return True while the device is open."""
-        return self._cap.isOpened()
-
-    def read(self):
-        """Read a frame; its capture time is the driver's buffer timestamp when plausible."""
-        cap = self._cap
-        ok, frame = cap.read()
-        captured = None
-        if ok:
-            # OpenCV's V4L2 backend gives the buffer's CLOCK_MONOTONIC time in ms here.
-            captured = cap.get(_POS_MSEC) / 1e3
-            if not 0 <= time.monotonic() - captured < 10.0:
-                captured = None
-        self.last_capture_time = captured
-        return ok, frame
-
-    def set(self, prop_id, value):  # noqa: A003 (OpenCV's name)
-        """Set an OpenCV capture property; False when the driver refuses."""
-        return bool(self._cap.set(prop_id, value))
-
-    def get(self, prop_id):
-        """Return an OpenCV capture property."""
-        return float(self._cap.get(prop_id))
-
-    def release(self):
-        """Close the device."""
-        self._cap.release()
-        self.device.close()
-
-    def interrupt(self):
-        """Nothing to do: a V4L2 read returns within OpenCV's select() timeout."""
-
-    def formats(self) -> List[FrameFormat]:
-        """Return what the device offers."""
-        return self.device.formats()
-
-    def controls(self) -> List[ControlInfo]:
-        """Return the device's controls with their current values."""
-        return self.device.controls()
-
-    def set_control(self, cid: int, value: int) -> Optional[str]:
-        """Set a device control through the driver."""
-        return self.device.set_control(cid, value)
-
-
-def open_v4l2(path: str, target, open_cap) -> Tuple[V4L2Device, object]:
-    """Open the device for its answers, then OpenCV's capture on it; V4L2Error says why not."""
-    device = V4L2Device(path)
-    try:
-        cap = open_cap(target)
-    except Exception:
-        device.close()
-        raise
-    if not cap.isOpened():
-        cap.release()
-        reason = ('the device is busy (another program is streaming from it)'
-                  if device.busy() else 'OpenCV cannot stream from it')
-        device.close()
-        raise V4L2Error(reason)
-    return device, cap

@@ -24,7 +24,8 @@ import numpy as np
 from py_vision.capture.controls import ControlInfo
 from py_vision.capture.opencv_env import prepare_opencv
 from py_vision.capture.pacing import FramePacer
-from py_vision.capture.source import Clock, FrameFormat, MONOTONIC
+from py_vision.capture.pixel_formats import OPENCV_BGR, PixelFormat
+from py_vision.capture.source import Clock, Frame, FrameFormat, MONOTONIC, StreamFormat
 
 __all__ = ['video_file_support', 'VideoFileSource']
 
@@ -128,6 +129,29 @@ class VideoFileSource:
     def interrupt(self):
         """Make the read() waiting for its frame in another thread (or the next) fail now."""
         self._pacer.cancel()
+
+    def configure(self, pixel_format: PixelFormat, width: int, height: int,
+                  fps: float) -> StreamFormat:
+        """Play at fps (the file's own rate when <= 0); return its own size, in BGR."""
+        self.set(cv2.CAP_PROP_FPS, fps)
+        width, height = self._size
+        return StreamFormat(OPENCV_BGR.fourcc, width, height, self._pacer.fps,
+                            OPENCV_BGR.bytesperline(width))
+
+    def start(self) -> None:
+        """Play: frames come from the next next_frame() on."""
+
+    def stop(self) -> None:
+        """Pause: playing goes on from the same frame."""
+
+    def next_frame(self) -> Optional[Frame]:
+        """Wait until the next frame is due and return it (BGR), or None when the file fails."""
+        if not self.grab():
+            return None
+        frame, self._grabbed = self._grabbed, None
+        width, height = self._size
+        return Frame(self.last_index, self.last_capture_time, OPENCV_BGR, width, height,
+                     frame.reshape(-1), OPENCV_BGR.bytesperline(width))
 
     def formats(self) -> List[FrameFormat]:
         """Return nothing: a file has the one size it was recorded at."""

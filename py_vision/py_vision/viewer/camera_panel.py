@@ -19,8 +19,9 @@ The camera panel's ROS side: the controls of the node that publishes the topic a
 through the standard parameter services (list, describe, get) and keeps them current from
 /parameter_events (a change made with `ros2 param set` shows at once) and a periodic re-read.
 A camera control is a parameter whose descriptor's additional_constraints mark it as one
-(control_descriptor); its range, step, menu and read-only flag come from that descriptor, so the
-panel shows what the camera reports. What the camera is (device, pixel format, measured rate)
+(control_descriptor); `control_json` maps each descriptor rclpy gives straight to what GET
+/camera shows (range, step, menu, read-only, a button), so the panel shows what the camera
+reports. What the camera is (device, pixel format, measured rate)
 comes from the publisher's parameters and, when it publishes them, its /diagnostics.
 
 Every ROS call is made on the executor's thread and answered there (async clients, nothing
@@ -30,7 +31,6 @@ answer with a bounded timeout. It implements camera_access.CameraAccess.
 
 import collections
 import concurrent.futures
-from dataclasses import dataclass
 import math
 import threading
 import time
@@ -69,6 +69,8 @@ IMAGE_TYPES = frozenset(('sensor_msgs/msg/Image', 'sensor_msgs/msg/CompressedIma
 _TYPE_NAMES = {ParameterType.PARAMETER_BOOL: 'bool', ParameterType.PARAMETER_INTEGER: 'integer',
                ParameterType.PARAMETER_DOUBLE: 'double', ParameterType.PARAMETER_STRING: 'string'}
 _TYPE_OF_NAME = {name: kind for kind, name in _TYPE_NAMES.items()}
+_BUTTON = 'button'   # a camera control's kind that is not a type: a bool that presses
+_KINDS = tuple(_TYPE_OF_NAME) + (_BUTTON,)
 _LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
 _STATUS = ' status'  # the diagnostics' level and message, under a key no value can have
 
@@ -89,90 +91,69 @@ def python_value(value: ParameterValue) -> Any:
     return '(a parameter of type %d)' % kind
 
 
-@dataclass
-class Control:
-    """One control as the panel shows it and GET /camera describes it."""
+def control_json(descriptor, value: ParameterValue) -> Optional[Dict[str, Any]]:
+    """
+    Return what GET /camera shows of one parameter of the camera's node, or None.
 
-    name: str
-    type: Optional[str]  # noqa: A003 'bool', 'integer', 'double', 'string'; None: not known
-    value: Any                     # None: not set (the camera's own value)
-    read_only: bool
-    group: str                     # 'camera' (a camera control) or 'stream'
-    description: str = ''
-    min: Optional[float] = None    # noqa: A003 (the JSON field's name)
-    max: Optional[float] = None    # noqa: A003
-    step: Optional[float] = None
-    menu: Optional[List[Dict[str, Any]]] = None
-    alias_of: Optional[str] = None  # another name of that control (usb_cam's names)
-    inactive: Optional[str] = None  # why the camera ignores it now ('while ...')
+    The one mapping from the descriptors rclpy gives (describe_parameters) to the page: a camera
+    control (its additional_constraints marked as one, control_descriptor) or a stream setting.
+    Its type, range, step, read-only flag and description are the descriptor's; its menu is the
+    one the description lists; `button`, `alias_of` (usb_cam's names) and `inactive` ('while
+    ...') are what the constraints say.
+    """
+    words = parse_constraints(descriptor.additional_constraints, _KINDS)
+    if words is None and descriptor.name not in STREAM_SETTINGS:
+        return None
+    kind = _TYPE_NAMES.get(descriptor.type) or _TYPE_NAMES.get(value.type)
+    if kind is None and words is not None and words.kind in _TYPE_OF_NAME:
+        kind = words.kind  # not set and dynamically typed: the type is named after the mark
+    bounds = step = None
+    if descriptor.integer_range:
+        bounds = descriptor.integer_range[0]
+        step, kind = bounds.step or 1, kind or 'integer'
+    elif descriptor.floating_point_range:
+        bounds = descriptor.floating_point_range[0]
+        step, kind = bounds.step, kind or 'double'
+    read_only = bool(descriptor.read_only)
+    return {'type': kind, 'value': python_value(value),
+            'min': bounds.from_value if bounds else None,
+            'max': bounds.to_value if bounds else None, 'step': step,
+            'menu': parse_menu(descriptor.description), 'read_only': read_only,
+            'live': not read_only, 'group': 'stream' if words is None else 'camera',
+            'description': descriptor.description,
+            'alias_of': words.alias_of if words else None,
+            'inactive': words.inactive if words else None,
+            'button': words is not None and words.kind == _BUTTON}
 
-    @classmethod
-    def from_descriptor(cls, descriptor, value: ParameterValue) -> Optional['Control']:
-        """Return the Control a descriptor describes, or None when it is neither kind."""
-        words = parse_constraints(descriptor.additional_constraints, tuple(_TYPE_OF_NAME))
-        if words is not None:
-            group = 'camera'
-        elif descriptor.name in STREAM_SETTINGS:
-            group = 'stream'
-        else:
-            return None
-        kind = _TYPE_NAMES.get(descriptor.type) or _TYPE_NAMES.get(value.type)
-        if kind is None and words is not None:
-            # Not set and dynamically typed: the control's type is named after the mark.
-            kind = words.kind
-        control = cls(descriptor.name, kind, python_value(value), bool(descriptor.read_only),
-                      group, descriptor.description, menu=parse_menu(descriptor.description))
-        if group == 'camera':
-            control.alias_of, control.inactive = words.alias_of, words.inactive
-        if descriptor.integer_range:
-            bounds = descriptor.integer_range[0]
-            control.min, control.max = bounds.from_value, bounds.to_value
-            control.step = bounds.step or 1
-            control.type = control.type or 'integer'
-        elif descriptor.floating_point_range:
-            bounds = descriptor.floating_point_range[0]
-            control.min, control.max = bounds.from_value, bounds.to_value
-            control.step = bounds.step
-            control.type = control.type or 'double'
-        return control
 
-    def to_json(self) -> Dict[str, Any]:
-        """Return the control as GET /camera shows it."""
-        return {'type': self.type, 'value': self.value, 'min': self.min, 'max': self.max,
-                'step': self.step, 'menu': self.menu, 'read_only': self.read_only,
-                'live': not self.read_only, 'group': self.group,
-                'description': self.description, 'alias_of': self.alias_of,
-                'inactive': self.inactive}
-
-    def request_value(self, value: Any) -> ParameterValue:
-        """Return value as this control's ParameterValue; raise CameraError(400) if mistyped."""
-        kind = self.type
-        if kind is None:  # unknown until set: the JSON type says what is meant
-            kind = {bool: 'bool', int: 'integer', float: 'double', str: 'string'}.get(
-                type(value))
-        good = False
-        if kind == 'bool':
-            good = isinstance(value, bool)
-        elif kind == 'integer':
-            if isinstance(value, float) and math.isfinite(value) and value.is_integer():
-                value = int(value)
-            good = (isinstance(value, int) and not isinstance(value, bool) and
-                    -2 ** 63 <= value < 2 ** 63)
-        elif kind == 'double':
-            good = (isinstance(value, (int, float)) and not isinstance(value, bool) and
-                    math.isfinite(value))
-            value = float(value) if good else value
-        elif kind == 'string':
-            good = isinstance(value, str)
-        if not good:
-            raise CameraError(400, 'control %s takes %s, got %s' % (
-                self.name, {'bool': 'true or false', 'integer': 'an integer',
-                            'double': 'a number', 'string': 'a string'}.get(kind, 'a value'),
-                _json_text(value)))
-        result = ParameterValue(type=_TYPE_OF_NAME[kind])
-        setattr(result, {'bool': 'bool_value', 'integer': 'integer_value',
-                         'double': 'double_value', 'string': 'string_value'}[kind], value)
-        return result
+def parameter_value(name: str, control: Dict[str, Any], value: Any) -> ParameterValue:
+    """Return value as control's ParameterValue; raise CameraError(400) if it is mistyped."""
+    kind = control['type']
+    if kind is None:  # unknown until set: the JSON type says what is meant
+        kind = {bool: 'bool', int: 'integer', float: 'double', str: 'string'}.get(type(value))
+    good = False
+    if kind == 'bool':
+        good = isinstance(value, bool)
+    elif kind == 'integer':
+        if isinstance(value, float) and math.isfinite(value) and value.is_integer():
+            value = int(value)
+        good = (isinstance(value, int) and not isinstance(value, bool) and
+                -2 ** 63 <= value < 2 ** 63)
+    elif kind == 'double':
+        good = (isinstance(value, (int, float)) and not isinstance(value, bool) and
+                math.isfinite(value))
+        value = float(value) if good else value
+    elif kind == 'string':
+        good = isinstance(value, str)
+    if not good:
+        raise CameraError(400, 'control %s takes %s, got %s' % (
+            name, {'bool': 'true or false', 'integer': 'an integer',
+                   'double': 'a number', 'string': 'a string'}.get(kind, 'a value'),
+            _json_text(value)))
+    result = ParameterValue(type=_TYPE_OF_NAME[kind])
+    setattr(result, {'bool': 'bool_value', 'integer': 'integer_value',
+                     'double': 'double_value', 'string': 'string_value'}[kind], value)
+    return result
 
 
 def _json_text(value):
@@ -251,7 +232,7 @@ class CameraPanel:
         self._lock = threading.Lock()  # guards what the HTTP threads read: the state below
         self._publisher: Optional[str] = None
         self._publishers: List[str] = []
-        self._controls: Dict[str, Control] = {}
+        self._controls: Dict[str, Dict[str, Any]] = {}  # name -> control_json()
         self._info: Dict[str, Any] = {}
         self._loaded = False
         self._problem = ''
@@ -282,7 +263,7 @@ class CameraPanel:
         """Return what the camera is and its controls (GET /camera)."""
         with self._lock:
             publisher, publishers, via = self._publisher, list(self._publishers), self._via
-            controls = {name: c.to_json() for name, c in self._controls.items()}
+            controls = {name: dict(c) for name, c in self._controls.items()}
             info, loaded, problem = dict(self._info), self._loaded, self._problem
             diagnostics = self._diagnostics
         if diagnostics is not None and self._clock() - diagnostics[0] > DIAGNOSTICS_STALE_S:
@@ -337,8 +318,9 @@ class CameraPanel:
                 's' if len(unknown) > 1 else '', ', '.join(map(_json_text, unknown)),
                 publisher, ', '.join(controls) or 'none'))
         names = list(values)
-        parameters = [ParameterMsg(name=name, value=controls[name].request_value(values[name]))
-                      for name in names]
+        parameters = [
+            ParameterMsg(name=name, value=parameter_value(name, controls[name], values[name]))
+            for name in names]
         answer = concurrent.futures.Future()
         self._submit(lambda: self._send_set(publisher, parameters, answer))
         try:
@@ -352,7 +334,7 @@ class CameraPanel:
                 reply[name] = {'applied': bool(result.successful), 'reason': result.reason}
                 if result.successful and self._publisher == publisher and (
                         name in self._controls):
-                    self._controls[name].value = python_value(parameter.value)
+                    self._controls[name]['value'] = python_value(parameter.value)
         return reply
 
     def _submit(self, job):
@@ -510,16 +492,17 @@ class CameraPanel:
                 return
             controls, info = {}, {}
             for descriptor, value in zip(descriptors, response.values):
-                control = Control.from_descriptor(descriptor, value)
+                control = control_json(descriptor, value)
                 if control is not None:
                     controls[descriptor.name] = control
                 if descriptor.name in INFO_PARAMETERS:
                     info[descriptor.name] = python_value(value)
             self._short_reads = 0
             # Camera controls first, then the stream settings, each in the node's order.
-            ordered = dict(sorted(controls.items(), key=lambda item: item[1].group != 'camera'))
+            ordered = dict(sorted(controls.items(),
+                                  key=lambda item: item[1]['group'] != 'camera'))
             self._loading = False
-            if not any(c.group == 'camera' for c in controls.values()):
+            if not any(c['group'] == 'camera' for c in controls.values()):
                 self._without_controls.add(self._publisher)
                 self._last_load = -math.inf  # look up the pipeline at the next refresh
             with self._lock:
@@ -537,9 +520,9 @@ class CameraPanel:
             for parameter in list(event.new_parameters) + list(event.changed_parameters):
                 control = self._controls.get(parameter.name)
                 if control is not None:
-                    control.value = python_value(parameter.value)
-                    if control.type is None:
-                        control.type = _TYPE_NAMES.get(parameter.value.type)
+                    control['value'] = python_value(parameter.value)
+                    if control['type'] is None:
+                        control['type'] = _TYPE_NAMES.get(parameter.value.type)
                 elif parameter.name in INFO_PARAMETERS:
                     self._info[parameter.name] = python_value(parameter.value)
                 else:

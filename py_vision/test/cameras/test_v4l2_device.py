@@ -87,7 +87,7 @@ def test_mjpeg_is_the_cameras_own_jpeg_published_untouched(
     camera = emulated_camera()   # webcam_1080p
     compressed = peer.collect(CompressedImage, 'usb_camera/image/compressed')
     node = start(launch, camera, ros_env, image_width=1280, image_height=720, framerate=30.0)
-    node.wait_for_output('opened %s: 1280x720 MJPEG at 30 fps, publishing' % camera.device, 30)
+    node.wait_for_output('opened %s: 1280x720 MJPG at 30 fps, publishing' % camera.device, 30)
     wait_until(lambda: len(compressed) >= 10, 30, what='10 compressed frames')
     indexes = []
     for msg in list(compressed)[:10]:
@@ -200,13 +200,13 @@ def test_a_camera_that_cannot_be_used_is_one_line_and_status_1(
 # any rate): the synthetic model must negotiate them as the emulated USB 2.0 webcam does.
 AGREEMENT = [(640, 480, 30.0, 'auto'), (1280, 720, 30.0, 'auto'), (1920, 1080, 15.0, 'auto'),
              (1280, 720, 30.0, 'yuyv'), (1920, 1080, 30.0, 'yuyv'), (800, 600, 30.0, 'yuyv'),
-             (320, 240, 25.0, 'mjpeg'), (1280, 720, 10.0, 'auto'), (160, 120, 5.0, 'auto')]
+             (320, 240, 25.0, 'mjpg'), (1280, 720, 10.0, 'auto'), (160, 120, 5.0, 'auto')]
 NEGOTIATE = """
 import json, sys
 from py_vision.capture import Camera
 for width, height, fps, fmt in json.loads(sys.argv[2]):
     camera = Camera.open(sys.argv[1], width, height, fps, fmt)
-    print(json.dumps([camera.pixel_format, camera.width, camera.height, camera.fps,
+    print(json.dumps([camera.pixel_format.fourcc, camera.width, camera.height, camera.fps,
                       camera.notes]))
     camera.release()
 """
@@ -225,7 +225,7 @@ def test_the_synthetic_camera_negotiates_as_the_emulated_webcam_does(emulated_ca
     devices = SyntheticDevices()
     for (width, height, fps, fmt), got in zip(AGREEMENT, emulated):
         synthetic = Camera.open('synthetic', width, height, fps, fmt, synthetic=devices)
-        assert [synthetic.pixel_format, synthetic.width, synthetic.height, synthetic.fps,
-                synthetic.notes] == got, (width, height, fps, fmt)
+        assert [synthetic.pixel_format.fourcc, synthetic.width, synthetic.height,
+                synthetic.fps, synthetic.notes] == got, (width, height, fps, fmt)
         synthetic.release()
     assert len(emulated) == len(AGREEMENT)

@@ -264,67 +264,80 @@ def descriptor(name, **fields):
 
 
 def test_controls_are_read_from_descriptors_as_the_contract_writes_them():
-    from py_vision.viewer.camera_panel import Control, parse_menu
+    from py_vision.viewer.camera_panel import control_json, parse_menu
     from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterValue
 
-    exposure = Control.from_descriptor(descriptor(
+    exposure = control_json(descriptor(
         'auto_exposure', type=2, description='Auto Exposure; menu: 1=Manual Mode; '
         '3=Aperture Priority Mode', additional_constraints='camera control, menu',
         integer_range=[IntegerRange(from_value=0, to_value=3, step=1)]), ros_value(3))
-    assert exposure.to_json() == {
+    assert exposure == {
         'type': 'integer', 'value': 3, 'min': 0, 'max': 3, 'step': 1, 'read_only': False,
-        'live': True, 'group': 'camera', 'description': exposure.description,
+        'live': True, 'group': 'camera', 'description': exposure['description'],
         'menu': [{'value': 1, 'label': 'Manual Mode'},
                  {'value': 3, 'label': 'Aperture Priority Mode'}],
-        'alias_of': None, 'inactive': None}
+        'alias_of': None, 'inactive': None, 'button': False}
 
-    temperature = Control.from_descriptor(descriptor(
+    temperature = control_json(descriptor(
         'white_balance_temperature', type=2, additional_constraints='camera control',
         integer_range=[IntegerRange(from_value=2800, to_value=6500, step=10)]),
         ros_value(4600))
-    assert (temperature.min, temperature.max, temperature.step) == (2800, 6500, 10)
-    assert temperature.menu is None and temperature.inactive is None
+    assert (temperature['min'], temperature['max'], temperature['step']) == (2800, 6500, 10)
+    assert temperature['menu'] is None and temperature['inactive'] is None
 
     # Optional words after the mark: why a control is inactive, and another name of one.
-    held = Control.from_descriptor(descriptor(
-        'exposure_time_absolute', type=2, additional_constraints='camera control 0x009a0902 '
-        '(int, step 1, default 156); inactive while auto_exposure is 3 (automatic)',
-        integer_range=[IntegerRange(from_value=3, to_value=2047, step=1)]), ros_value(156))
-    assert held.inactive == 'while auto_exposure is 3 (automatic)'
-    alias = Control.from_descriptor(descriptor(
+    held = control_json(descriptor(
+        'gain', type=2, additional_constraints='camera control 0x00980913 '
+        '(integer, step 1, default 100); inactive while gain_automatic is 1',
+        integer_range=[IntegerRange(from_value=0, to_value=255, step=1)]), ros_value(100))
+    assert held['inactive'] == 'while gain_automatic is 1'
+    alias = control_json(descriptor(
         'exposure', type=2, additional_constraints='camera control: usb_cam name for '
         'exposure_time_absolute'), ros_value(156))
-    assert alias.alias_of == 'exposure_time_absolute' and alias.inactive is None
+    assert alias['alias_of'] == 'exposure_time_absolute' and alias['inactive'] is None
 
-    fixed = Control.from_descriptor(descriptor(
+    fixed = control_json(descriptor(
         'exposure_time_absolute', type=2, read_only=True,
         additional_constraints='camera control'), ros_value(156))
-    assert fixed.read_only and fixed.to_json()['live'] is False
+    assert fixed['read_only'] and fixed['live'] is False
 
-    switch = Control.from_descriptor(descriptor(
+    switch = control_json(descriptor(
         'focus_automatic_continuous', type=1, additional_constraints='camera control'),
         ros_value(True))
-    assert switch.type == 'bool' and switch.value is True and switch.min is None
+    assert (switch['type'], switch['value'], switch['min'], switch['button']) == (
+        'bool', True, None, False)
+    # A button is a bool the page shows as a button to press.
+    button = control_json(descriptor(
+        'do_white_balance', type=1, additional_constraints='camera control 0x0098090d '
+        '(button)'), ros_value(False))
+    assert (button['type'], button['value'], button['button']) == ('bool', False, True)
+    # A 64-bit control's whole range.
+    wide = control_json(descriptor(
+        'integer_64_bits', type=2, additional_constraints='camera control 0x0098f903 '
+        '(integer64, step 1, default 0)',
+        integer_range=[IntegerRange(from_value=-2 ** 63, to_value=2 ** 63 - 1, step=1)]),
+        ros_value(2 ** 40))
+    assert (wide['type'], wide['min'], wide['max'], wide['value']) == (
+        'integer', -2 ** 63, 2 ** 63 - 1, 2 ** 40)
 
     # Not set yet (usb_cam's names): dynamically typed, the type named after the mark.
-    unset = Control.from_descriptor(descriptor(
+    unset = control_json(descriptor(
         'autofocus', dynamic_typing=True, additional_constraints='camera control, bool'),
         ParameterValue())
-    assert unset.type == 'bool' and unset.value is None
-    gain = Control.from_descriptor(descriptor(
+    assert unset['type'] == 'bool' and unset['value'] is None
+    gain = control_json(descriptor(
         'gain', dynamic_typing=True, additional_constraints='camera control, integer',
         floating_point_range=[]), ParameterValue())
-    assert gain.type == 'integer'
-    zoom = Control.from_descriptor(descriptor(
+    assert gain['type'] == 'integer'
+    zoom = control_json(descriptor(
         'zoom', type=3, additional_constraints='camera control',
         floating_point_range=[FloatingPointRange(from_value=1.0, to_value=4.0)]),
         ros_value(1.0))
-    assert zoom.type == 'double' and (zoom.min, zoom.max) == (1.0, 4.0)
+    assert zoom['type'] == 'double' and (zoom['min'], zoom['max']) == (1.0, 4.0)
 
-    assert Control.from_descriptor(descriptor(
+    assert control_json(descriptor(
         'framerate', type=3, additional_constraints='a number > 0'), ros_value(10.0)) is None
-    assert Control.from_descriptor(descriptor('jpeg_quality', type=2), ros_value(80)).group \
-        == 'stream'
+    assert control_json(descriptor('jpeg_quality', type=2), ros_value(80))['group'] == 'stream'
     assert parse_menu('no menu here') is None
     assert parse_menu('Power Line Frequency; menu: 0=Disabled; 1=50 Hz; 2=60 Hz') == [
         {'value': 0, 'label': 'Disabled'}, {'value': 1, 'label': '50 Hz'},
@@ -332,24 +345,28 @@ def test_controls_are_read_from_descriptors_as_the_contract_writes_them():
 
 
 def test_a_value_of_the_wrong_type_is_refused_before_it_reaches_the_node():
-    from py_vision.viewer.camera_panel import Control
     from py_vision.viewer.camera_access import CameraError
+    from py_vision.viewer.camera_panel import parameter_value
     from rcl_interfaces.msg import ParameterValue
     import pytest
 
-    integer = Control('brightness', 'integer', None, False, 'camera')
-    assert integer.request_value(7).integer_value == 7
-    assert integer.request_value(7.0).integer_value == 7  # what JSON from JavaScript may hold
-    switch = Control('autofocus', 'bool', None, False, 'camera')
-    assert switch.request_value(False).type == 1
-    for control, value in ((integer, True), (integer, 1.5), (integer, '7'), (integer, None),
-                           (switch, 1), (switch, 'on'), (integer, float('nan'))):
+    integer, switch, unknown = {'type': 'integer'}, {'type': 'bool'}, {'type': None}
+    assert parameter_value('brightness', integer, 7).integer_value == 7
+    # what JSON from JavaScript may hold
+    assert parameter_value('brightness', integer, 7.0).integer_value == 7
+    assert parameter_value('brightness', integer, -2 ** 63).integer_value == -2 ** 63
+    assert parameter_value('autofocus', switch, False).type == 1
+    for name, control, value in (
+            ('brightness', integer, True), ('brightness', integer, 1.5),
+            ('brightness', integer, '7'), ('brightness', integer, None),
+            ('brightness', integer, 2 ** 63), ('autofocus', switch, 1),
+            ('autofocus', switch, 'on'), ('brightness', integer, float('nan'))):
         with pytest.raises(CameraError) as refused:
-            control.request_value(value)
-        assert refused.value.status == 400 and control.name in str(refused.value)
-    unknown = Control('x', None, None, False, 'camera')
-    assert unknown.request_value(2).type == 2 and unknown.request_value(True).type == 1
-    assert isinstance(unknown.request_value('a'), ParameterValue)
+            parameter_value(name, control, value)
+        assert refused.value.status == 400 and name in str(refused.value)
+    assert parameter_value('x', unknown, 2).type == 2
+    assert parameter_value('x', unknown, True).type == 1
+    assert isinstance(parameter_value('x', unknown, 'a'), ParameterValue)
 
 
 def test_through_a_processing_node_the_panel_shows_the_camera_upstream(launch):

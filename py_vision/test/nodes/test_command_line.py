@@ -57,7 +57,8 @@ def test_help_lists_the_parameters_and_starts_nothing(launch, executable, flag):
         assert 'image_width (integer, 1..8192; default 640)' in out
         assert "brightness (integer, the camera's own range; default not set" in out
         assert 'autoexposure (bool, true or false; default not set' in out
-        assert "pixel_format (string, auto or mjpeg or yuyv; default 'auto')" in out
+        assert 'pixel_format (string, auto, or a FourCC: yuyv, uyvy,' in out
+        assert "or usb_cam's mjpeg, mono8, mono16, rgb24, bgr24; default 'auto')" in out
     else:
         assert 'web_port (integer, 0..65535; default 8080)' in out
     # Nothing started: no node, no device, no viewer.

@@ -27,7 +27,7 @@ import re
 import time
 
 from param_client import describe_parameters
-from py_vision.capture import USB_CAM_ALIASES
+from py_vision.control_names import USB_CAM_ALIASES
 import pytest
 from rclpy.parameter import parameter_value_to_python
 from rclpy.parameter_client import AsyncParameterClient

@@ -16,11 +16,15 @@
 
 import cv2
 import numpy as np
-from py_vision.capture import Camera as _Camera, SourceError, SyntheticDevices
+from py_vision.capture import Camera as _Camera, SourceError, StreamFormat, SyntheticDevices
+from py_vision.capture.controls import CID
+from py_vision.capture.pixel_formats import find, FORMATS
+from py_vision.capture.source import Frame
 from py_vision.capture.synthetic_device import SyntheticCamera
 from py_vision.capture.synthetic_picture import (
-    JPEG_QUALITY, read_frame_index, synthetic_frame, synthetic_jpeg)
+    JPEG_QUALITY, read_frame_index, synthetic_frame, synthetic_jpeg, synthetic_yuyv)
 from py_vision.capture.v4l2 import V4L2Device, V4L2Error
+from py_vision.control_names import ControlNames, param_name
 import pytest
 
 
@@ -47,15 +51,15 @@ class Camera:
 
 
 @pytest.mark.parametrize('width,height,fps,fmt,rate', [
-    (640, 480, 30.0, 'yuyv', 30.0),      # YUYV fits the bus at VGA 30
-    (1280, 720, 30.0, 'mjpeg', 30.0),    # YUYV would give 10: MJPEG reaches 30
-    (1920, 1080, 30.0, 'mjpeg', 30.0),   # YUYV would give 5
-    (1280, 720, 10.0, 'yuyv', 10.0),     # YUYV reaches 10 at 720p
-    (640, 480, 200.0, 'mjpeg', 200.0),
+    (640, 480, 30.0, 'YUYV', 30.0),      # YUYV fits the bus at VGA 30
+    (1280, 720, 30.0, 'MJPG', 30.0),     # YUYV would give 10: MJPEG reaches 30
+    (1920, 1080, 30.0, 'MJPG', 30.0),    # YUYV would give 5
+    (1280, 720, 10.0, 'YUYV', 10.0),     # YUYV reaches 10 at 720p
+    (640, 480, 200.0, 'MJPG', 200.0),
 ])
 def test_auto_reaches_the_requested_rate(width, height, fps, fmt, rate):
     camera = Camera.open('synthetic', width, height, fps, 'auto')
-    assert (camera.pixel_format, camera.fps) == (fmt, rate)
+    assert (camera.pixel_format.fourcc, camera.fps) == (fmt, rate)
     assert (camera.width, camera.height) == (width, height)
     assert camera.notes == []
 
@@ -64,30 +68,54 @@ def test_auto_reaches_the_requested_rate(width, height, fps, fmt, rate):
                                                (1920, 1080, 5.0)])
 def test_yuyv_is_limited_by_the_bus_and_says_so(width, height, rate):
     camera = Camera.open('synthetic', width, height, 30.0, 'yuyv')
-    assert (camera.pixel_format, camera.fps) == ('yuyv', rate)
+    assert (camera.pixel_format.fourcc, camera.fps) == ('YUYV', rate)
     if rate < 30:
-        assert len(camera.notes) == 1
-        assert '30 fps requested, the camera gives %g fps in YUYV' % rate in camera.notes[0]
-        assert 'USB 2.0' in camera.notes[0]
+        assert camera.notes == [
+            '30 fps requested, the camera gives %g fps in YUYV (YUYV at this size is limited '
+            'by the bus; pixel_format:=mjpg or auto reaches higher rates)' % rate]
     assert 'YUYV at %g fps' % rate in camera.describe()
 
 
 def test_a_format_the_camera_refuses_is_one_note_naming_what_it_gives():
-    camera = Camera.open('synthetic?formats=yuyv', 640, 480, 30.0, 'mjpeg')
-    assert camera.pixel_format == 'yuyv'
-    assert camera.notes == ['the camera refuses pixel_format mjpeg; it gives yuyv instead']
-    camera = Camera.open('synthetic?formats=mjpeg', 640, 480, 30.0, 'yuyv')
-    assert camera.pixel_format == 'mjpeg'
+    camera = Camera.open('synthetic?formats=yuyv', 640, 480, 30.0, 'mjpg')
+    assert camera.pixel_format.fourcc == 'YUYV'
+    assert camera.notes == [
+        'the camera refuses pixel_format mjpg (it offers YUYV); it gives YUYV instead']
+    camera = Camera.open('synthetic?formats=mjpg', 640, 480, 30.0, 'yuyv')
+    assert camera.pixel_format.fourcc == 'MJPG'
 
 
 def test_auto_stays_with_yuyv_when_the_camera_has_no_mjpeg():
     camera = Camera.open('synthetic?formats=yuyv', 1280, 720, 30.0, 'auto')
-    assert (camera.pixel_format, camera.fps) == ('yuyv', 10.0)
-    assert '30 fps requested, the camera gives 10 fps in YUYV' in camera.notes[0]
+    assert (camera.pixel_format.fourcc, camera.fps) == ('YUYV', 10.0)
+    assert camera.notes == ['30 fps requested, the camera gives 10 fps in YUYV']
+
+
+@pytest.mark.parametrize('offered,output,chosen', [
+    ('grey,yuyv', 'bgr8', 'YUYV'),       # colour wins for a colour output
+    ('grey,yuyv', 'mono8', 'GREY'),      # the least work for mono8
+    ('grey,y16', 'mono16', 'Y16'),       # the most bits for mono16
+    ('grey,y16', 'mono8', 'GREY'),
+    ('rgb3,bgr3,yuyv', 'bgr8', 'BGR3'),  # a view beats a swap beats a conversion
+    ('rgb3,bgr3,yuyv', 'rgb8', 'RGB3'),
+    ('nv12,uyvy', 'native', 'UYVY'),     # sensor_msgs has UYVY (yuv422), not NV12
+    ('grey', 'bgr8', 'GREY'),            # a camera that sends neither YUYV nor MJPEG opens
+])
+def test_auto_chooses_the_least_work_for_the_output(offered, output, chosen):
+    camera = Camera.open('synthetic?formats=%s' % offered, 640, 480, 15.0, 'auto', output)
+    assert camera.pixel_format.fourcc == chosen and camera.notes == []
+
+
+def test_auto_prefers_a_format_that_reaches_the_rate_over_less_work():
+    # RGB3 at 640x480 is 27.6 MB/s at 30 fps: more than USB 2.0 carries (15 fps).
+    camera = Camera.open('synthetic?formats=rgb3,yuyv', 640, 480, 30.0, 'auto', 'rgb8')
+    assert (camera.pixel_format.fourcc, camera.fps) == ('YUYV', 30.0)
+    camera = Camera.open('synthetic?formats=rgb3,yuyv', 640, 480, 15.0, 'auto', 'rgb8')
+    assert (camera.pixel_format.fourcc, camera.fps) == ('RGB3', 15.0)
 
 
 def test_mjpeg_frames_are_the_cameras_jpeg_and_decode_only_on_demand():
-    camera = Camera.open('synthetic', 1280, 720, 30.0, 'mjpeg')
+    camera = Camera.open('synthetic', 1280, 720, 30.0, 'mjpg')
     frame = camera.read()
     assert frame.jpeg is not None and frame.jpeg.ndim == 1
     assert bytes(frame.jpeg[:2]) == b'\xff\xd8'
@@ -107,14 +135,10 @@ class ScriptedSource:
 
     def __init__(self, payloads):
         self.payloads = list(payloads)
-        self.last_index = self.last_capture_time = None
 
-    def get(self, prop):
-        return {cv2.CAP_PROP_FRAME_WIDTH: 640, cv2.CAP_PROP_FRAME_HEIGHT: 480,
-                cv2.CAP_PROP_FPS: 30.0}[prop]
-
-    def read(self):
-        return True, np.frombuffer(self.payloads.pop(0), np.uint8).reshape(1, -1)
+    def next_frame(self):
+        data = np.frombuffer(self.payloads.pop(0), np.uint8)
+        return Frame(None, None, find('mjpg'), 640, 480, data)
 
 
 def test_a_broken_jpeg_is_corrupt_even_after_whole_ones_with_the_same_header():
@@ -123,11 +147,43 @@ def test_a_broken_jpeg_is_corrupt_even_after_whole_ones_with_the_same_header():
     noisy[2:300] = bytes((7 * i) % 255 for i in range(298))  # header noise, EOI still there
     frames = [whole, whole + bytes(16), bytes(noisy), whole[:len(whole) // 2], whole[:-2],
               whole]
-    camera = _Camera(ScriptedSource(frames), 'scripted', 'mjpeg', [])
+    camera = _Camera(ScriptedSource(frames), 'scripted', StreamFormat('MJPG', 640, 480, 30.0),
+                     [])
     corrupt = [camera.read().corrupt for _ in frames]
     # Padding after EOI is a UVC payload's and harmless; noise, a cut or no EOI are not.
     assert corrupt == [False, False, True, True, True, False]
     assert cv2.imdecode(np.frombuffer(bytes(noisy), np.uint8), cv2.IMREAD_COLOR) is None
+
+
+RAW = [pixel_format for pixel_format in FORMATS.values() if not pixel_format.compressed]
+
+
+@pytest.mark.parametrize('pixel_format', RAW, ids=lambda pixel_format: pixel_format.fourcc)
+def test_every_raw_format_comes_as_sent_and_converts_right(pixel_format):
+    camera = Camera.open('synthetic?formats=%s' % pixel_format.fourcc.lower(), 320, 240, 15.0,
+                         pixel_format.fourcc.lower())
+    assert camera.pixel_format is pixel_format and camera.notes == []
+    frame = camera.read()
+    sent = np.ascontiguousarray(pixel_format.from_yuyv(synthetic_yuyv(frame.index, 320, 240)))
+    assert frame.data.tobytes() == sent.tobytes()
+    native = frame.image('native')
+    expected = synthetic_frame(frame.index, 320, 240)
+    if pixel_format.encoding is not None:
+        assert frame.encoding('native') == pixel_format.encoding
+        assert native.reshape(-1).view(np.uint8).tobytes() == sent.tobytes()
+    else:
+        assert frame.encoding('native') == pixel_format.native_encoding
+    bgr = frame.image('bgr8')
+    assert bgr.shape == (240, 320, 3) and read_frame_index(bgr) == frame.index
+    if pixel_format.mono:   # a grey camera's pixels are its luma
+        expected = cv2.cvtColor(synthetic_yuyv(frame.index, 320, 240)[:, :, 0],
+                                cv2.COLOR_GRAY2BGR)
+    # The colour bars and the ramp, within what the format's sampling loses.
+    assert np.abs(bgr.astype(int) - expected).mean() < 2.0
+    assert np.array_equal(frame.image('rgb8'), bgr[:, :, ::-1])
+    mono8, mono16 = frame.image('mono8'), frame.image('mono16')
+    assert mono8.shape == (240, 320) and mono16.dtype == np.uint16
+    assert np.abs(mono16.astype(int) // 256 - mono8).max() <= 1
 
 
 def test_yuyv_frames_are_bgr_and_exact():
@@ -165,32 +221,40 @@ def mean_bgr(camera):
     return camera.read().bgr().reshape(-1, 3).mean(axis=0)
 
 
-@pytest.mark.parametrize('fmt', ['yuyv', 'mjpeg'])
+def value(camera, cid):
+    """Return a control's value as the camera reports it now."""
+    return next(control.value for control in camera.controls() if control.cid == cid)
+
+
+def refusal(camera, cid, value):
+    """Set one control; return the camera's refusal in words (None: set)."""
+    refused = camera.set_controls({cid: value})
+    return ControlNames(camera.controls()).words(refused[cid]) if refused else None
+
+
+@pytest.mark.parametrize('fmt', ['yuyv', 'mjpg'])
 def test_controls_change_the_picture_in_the_expected_direction(fmt):
     camera = Camera.open('synthetic', 320, 240, 30.0, fmt)
     base = mean_bgr(camera)
-    assert camera.set_control('brightness', 40) is None
-    assert camera.values()['brightness'] == 40
+    assert camera.set_controls({CID.BRIGHTNESS: 40}) == {}
+    assert value(camera, CID.BRIGHTNESS) == 40
     assert mean_bgr(camera).mean() > base.mean() + 20
-    camera.set_control('brightness', 0)
-    camera.set_control('autoexposure', False)
-    assert camera.set_control('exposure', 400) is None
+    # Manual exposure and the exposure time in one batch: the mode goes first.
+    assert camera.set_controls({CID.BRIGHTNESS: 0, CID.EXPOSURE_ABSOLUTE: 400,
+                                CID.EXPOSURE_AUTO: 1}) == {}
     assert mean_bgr(camera).mean() > base.mean() + 10
-    camera.set_control('exposure', 166)
-    camera.set_control('auto_white_balance', False)
-    camera.set_control('white_balance', 2800)  # a low temperature: bluer
+    camera.set_controls({CID.EXPOSURE_ABSOLUTE: 166, CID.WHITE_BALANCE_TEMPERATURE: 2800,
+                         CID.AUTO_WHITE_BALANCE: 0})   # a low temperature: bluer
     b, g, r = mean_bgr(camera)
     assert b - r > (base[0] - base[2]) + 10
-    camera.set_control('auto_white_balance', True)
+    camera.set_controls({CID.AUTO_WHITE_BALANCE: 1})
 
     def luma_spread():
         return cv2.cvtColor(camera.read().bgr(), cv2.COLOR_BGR2GRAY).astype(float).std()
     contrast_base = luma_spread()
-    camera.set_control('contrast', 8)
+    camera.set_controls({CID.CONTRAST: 8})
     assert luma_spread() < contrast_base * 0.5
-    camera.set_control('contrast', 32)
-    camera.set_control('autofocus', False)
-    camera.set_control('focus', 200)
+    camera.set_controls({CID.CONTRAST: 32, CID.FOCUS_AUTO: 0, CID.FOCUS_ABSOLUTE: 200})
 
     def edge_energy(image):
         luma = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY).astype(float)
@@ -201,33 +265,31 @@ def test_controls_change_the_picture_in_the_expected_direction(fmt):
 
 def test_controls_are_the_devices_own_and_checked_against_its_ranges():
     camera = Camera.open('synthetic', 320, 240, 30.0, 'yuyv')
-    assert {control.name for control in camera.controls()} == {
+    assert {param_name(control.label) for control in camera.controls()} == {
         'brightness', 'contrast', 'saturation', 'sharpness', 'gain', 'white_balance_automatic',
         'white_balance_temperature', 'auto_exposure', 'exposure_time_absolute',
         'focus_automatic_continuous', 'focus_absolute'}
-    assert camera.set_control('brightness', 200) == \
+    assert refusal(camera, CID.BRIGHTNESS, 200) == \
         "brightness: 200 is out of the camera's range -64..64"
     assert camera.source.get(cv2.CAP_PROP_BRIGHTNESS) == 0
-    # usb_cam's switch is a boolean; the device's menu says manual mode is 1.
-    assert camera.set_control('autoexposure', False) is None
-    assert camera.values()['auto_exposure'] == 1
+    assert refusal(camera, CID.EXPOSURE_AUTO, 1) is None
     assert camera.source.get(cv2.CAP_PROP_AUTO_EXPOSURE) == 1
-    assert camera.set_control('auto_exposure', 2) == \
+    assert refusal(camera, CID.EXPOSURE_AUTO, 2) == \
         'auto_exposure: 2 is not one of its menu entries (1=Manual Mode; ' \
         '3=Aperture Priority Mode)'
+    assert refusal(camera, 0x00980999, 1) == 'control 0x00980999: the camera has no such control'
 
 
-def test_a_control_an_automatic_mode_owns_is_refused_with_the_reason():
+def test_a_control_an_automatic_mode_holds_is_refused_naming_the_mode():
     camera = Camera.open('synthetic', 320, 240, 30.0, 'yuyv')
-    exposure = camera.control('exposure_time_absolute')
-    assert exposure.inactive and exposure.inactive_reason == 'auto_exposure is 3'
-    assert camera.set_control('exposure_time_absolute', 300) == \
+    exposure = next(c for c in camera.controls() if c.cid == CID.EXPOSURE_ABSOLUTE)
+    assert exposure.inactive and exposure.governor == CID.EXPOSURE_AUTO
+    assert refusal(camera, CID.EXPOSURE_ABSOLUTE, 300) == \
         'exposure_time_absolute is inactive while auto_exposure is 3'
-    assert camera.set_control('exposure', 300) == \
-        'exposure is inactive while auto_exposure is 3'
-    assert camera.set_control('auto_exposure', 1) is None
-    assert camera.set_control('exposure', 300) is None
-    assert camera.values()['exposure_time_absolute'] == 300
+    assert value(camera, CID.EXPOSURE_ABSOLUTE) == 166   # nothing reached the device
+    assert refusal(camera, CID.EXPOSURE_AUTO, 1) is None
+    assert refusal(camera, CID.EXPOSURE_ABSOLUTE, 300) is None
+    assert value(camera, CID.EXPOSURE_ABSOLUTE) == 300
 
 
 def test_a_file_has_no_controls_and_says_which(tmp_path):
@@ -236,9 +298,11 @@ def test_a_file_has_no_controls_and_says_which(tmp_path):
     for _ in range(3):
         writer.write(np.zeros((48, 64, 3), np.uint8))
     writer.release()
-    camera = Camera.open(path, 640, 480, 10.0, 'mjpeg')
-    assert camera.pixel_format == 'file' and camera.controls() == []
-    assert camera.set_control('gain', 3) == '%s has no gain control' % path
+    camera = Camera.open(path, 640, 480, 10.0, 'mjpg')
+    assert camera.file and camera.controls() == []
+    assert camera.describe() == "64x48 video file at 10 fps (the file's own size; 640x480 " \
+        'requested)'
+    assert refusal(camera, CID.GAIN, 3) == 'control 0x00980913: the camera has no such control'
 
 
 def test_a_missing_device_is_a_source_error():

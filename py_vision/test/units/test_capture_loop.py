@@ -13,13 +13,15 @@
 # limitations under the License.
 
 
-"""CaptureLoop: losses (failed reads, stalls), reopen, controls re-applied, stale and corrupt."""
+"""CaptureLoop: losses, reopen, controls re-applied, stale, corrupt, error and dropped frames."""
 
 import threading
 import time
 
 from py_vision.capture import Camera, CaptureLoop, LoopTiming, SourceError, SyntheticDevices
+from py_vision.capture.controls import CID
 from py_vision.capture.source import Frame
+from py_vision.control_names import ControlNames
 from ros_harness import wait_until
 
 FAST = LoopTiming(backoff_s=(0.01,), stall_periods=3, min_stall_s=0.2, first_frame_s=0.5)
@@ -42,7 +44,7 @@ class Log:
 
 
 class Device:
-    """Opens the synthetic camera, can be unplugged, stalled or made to send corrupt frames."""
+    """Opens the synthetic camera: unplugged, stalled, corrupt, error, skipped frames at will."""
 
     def __init__(self, fps=100.0):
         self.fps = fps
@@ -51,28 +53,47 @@ class Device:
         self.present.set()
         self.stalled = threading.Event()
         self.corrupt = threading.Event()
+        self.errors = threading.Event()
+        self.skip = threading.Event()    # every other frame never delivered
         self.opened = 0
+        self.streaming = []              # start() and stop() of the cameras, in order
 
     def open(self):  # noqa: A003
         if not self.present.is_set():
             raise SourceError('cannot open video_device "test": unplugged')
-        camera = Camera.open('synthetic', 160, 120, self.fps, 'mjpeg', synthetic=self.devices)
+        camera = Camera.open('synthetic', 160, 120, self.fps, 'mjpg', synthetic=self.devices)
         self.opened += 1
-        device, read = self, camera.read
+        device, read, start, stop = self, camera.read, camera.start, camera.stop
 
         def read_as_device():
             if not device.present.is_set():
                 return None
             if device.stalled.is_set():
-                time.sleep(0.25)   # OpenCV's read times out: no frame, no error
+                time.sleep(0.25)   # the read times out: no frame, no error
                 return None
             frame = read()
+            if frame is not None and device.skip.is_set():
+                frame = read()
             if frame is not None and device.corrupt.is_set():
-                return Frame(frame.index, frame.capture_time, frame.width, frame.height,
-                             jpeg=frame.jpeg[:len(frame.jpeg) // 2], corrupt=True)
+                return Frame(frame.index, frame.capture_time, frame.pixel_format, frame.width,
+                             frame.height, frame.data[:len(frame.data) // 2], corrupt=True)
+            if frame is not None and device.errors.is_set():
+                return Frame(frame.index, frame.capture_time, frame.pixel_format, error=True)
             return frame
-        camera.read = read_as_device
+
+        def start_as_device():
+            device.streaming.append('start')
+            start()
+
+        def stop_as_device():
+            device.streaming.append('stop')
+            stop()
+        camera.read, camera.start, camera.stop = read_as_device, start_as_device, stop_as_device
         return camera
+
+
+def value(camera, cid):
+    return next(control.value for control in camera.controls() if control.cid == cid)
 
 
 def run_loop(device, timing=FAST):
@@ -89,7 +110,7 @@ def test_frames_flow_and_stats_say_what_the_device_gives():
     try:
         wait_until(lambda: len(frames) >= 20, 10, what='20 frames')
         stats = loop.stats()
-        assert stats.present and stats.streaming and stats.pixel_format == 'mjpeg'
+        assert stats.present and stats.streaming and stats.pixel_format == 'MJPG'
         assert (stats.width, stats.height, stats.fps) == (160, 120, 100.0)
         wait_until(lambda: loop.stats().measured_fps > 50, 10, what='a measured rate')
     finally:
@@ -102,14 +123,14 @@ def test_an_unplug_is_a_loss_the_device_is_reopened_and_controls_applied_again()
     loop, frames, log = run_loop(device)
     loop.start()
     try:
-        assert loop.set_control('brightness', 20) is None
+        assert loop.set_controls({CID.BRIGHTNESS: 20}) == {}
         wait_until(lambda: frames, 10, what='frames')
         device.present.clear()
         wait_until(lambda: loop.stats().lost == 1, 10, what='the loss')
         assert any('lost test after 5 failed reads' in line for line in log.lines)
         device.present.set()
         wait_until(lambda: loop.stats().reconnects == 1, 10, what='the reconnect')
-        assert loop.camera.values()['brightness'] == 20
+        assert value(loop.camera, CID.BRIGHTNESS) == 20
         count = len(frames)
         wait_until(lambda: len(frames) > count, 10, what='frames after the reconnect')
     finally:
@@ -149,6 +170,45 @@ def test_corrupt_frames_are_counted_and_never_handed_on():
     assert sum('corrupt frame' in line for line in log.lines) == 1
 
 
+def test_frames_flagged_as_errors_are_counted_and_never_handed_on():
+    device = Device()
+    loop, frames, log = run_loop(device)
+    loop.start()
+    try:
+        wait_until(lambda: frames, 10, what='frames')
+        device.errors.set()
+        wait_until(lambda: loop.stats().errors >= 5, 10, what='error frames')
+        count = len(frames)
+        device.errors.clear()
+        wait_until(lambda: len(frames) > count + 5, 10, what='frames again')
+    finally:
+        loop.close()
+    assert not any(frame.error for frame in frames)
+    stats = loop.stats()
+    assert stats.lost == 0 and stats.corrupt == 0   # the device is there and sends whole ones
+    assert sum('flagged as an error' in line for line in log.lines) == 1
+
+
+def test_frames_the_numbering_skips_are_counted_as_dropped():
+    device = Device()
+    loop, frames, log = run_loop(device)
+    loop.start()
+    try:
+        wait_until(lambda: len(frames) >= 5, 10, what='frames')
+        assert loop.stats().dropped == 0
+        device.skip.set()
+        before = len(frames)
+        wait_until(lambda: len(frames) >= before + 10, 10, what='frames with gaps')
+        device.skip.clear()
+        stats = loop.stats()
+    finally:
+        loop.close()
+    # Every frame handed on after the skipping began follows one that never came.
+    indexes = [frame.index for frame in frames[before:before + 10]]
+    assert all(later - earlier == 2 for earlier, later in zip(indexes, indexes[1:]))
+    assert stats.dropped >= 9
+
+
 def test_pause_keeps_the_device_and_resume_drops_what_was_captured_before():
     device = Device()
     loop, frames, log = run_loop(device)
@@ -158,15 +218,17 @@ def test_pause_keeps_the_device_and_resume_drops_what_was_captured_before():
     wait_until(lambda: frames, 10, what='frames')
     assert loop.pause()
     assert loop.camera is camera and loop.stats().present and not loop.stats().streaming
-    assert loop.set_control('contrast', 10) is None
+    assert device.streaming == ['start', 'stop']   # the stream stopped, the device kept
+    assert loop.set_controls({CID.CONTRAST: 10}) == {}
     paused_at = device.devices.clock.now()
     frames.clear()
     loop.resume()
     wait_until(lambda: len(frames) >= 3, 10, what='frames after resume')
     loop.close()
     assert all(frame.capture_time >= paused_at for frame in frames)
-    assert device.opened == 1
-    assert camera.values()['contrast'] == 10
+    assert device.opened == 1 and device.streaming[:3] == ['start', 'stop', 'start']
+    assert loop.stats().dropped == 0   # frames missed while paused are not drops
+    assert value(camera, CID.CONTRAST) == 10
 
 
 def test_a_refused_control_is_said_and_not_kept():
@@ -174,10 +236,54 @@ def test_a_refused_control_is_said_and_not_kept():
     loop, frames, log = run_loop(device)
     loop.open()
     try:
-        assert loop.set_control('brightness', 500) == \
-            "brightness: 500 is out of the camera's range -64..64"
-        assert 'brightness' not in loop.wanted_controls()
-        assert loop.set_control('focus', 10) == \
+        names = ControlNames(loop.controls())
+        refused = loop.set_controls({CID.BRIGHTNESS: 500, CID.CONTRAST: 10})
+        assert [names.words(r) for r in refused.values()] == [
+            "brightness: 500 is out of the camera's range -64..64"]
+        assert loop.wanted_controls() == {CID.CONTRAST: 10}
+        refused = loop.set_controls({CID.FOCUS_ABSOLUTE: 10})
+        assert names.words(refused[CID.FOCUS_ABSOLUTE], {CID.FOCUS_ABSOLUTE: 'focus'}) == \
             'focus is inactive while focus_automatic_continuous is 1'
+    finally:
+        loop.close()
+
+
+def test_a_batch_sets_the_automatic_mode_first_and_is_applied_so_after_a_reconnect():
+    device = Device()
+    loop, frames, log = run_loop(device)
+    loop.start()
+    try:
+        # Focus before autofocus in the batch: autofocus goes first, so the focus is free.
+        assert loop.set_controls({CID.FOCUS_ABSOLUTE: 40, CID.FOCUS_AUTO: 0}) == {}
+        assert value(loop.camera, CID.FOCUS_ABSOLUTE) == 40
+        # A press (keep=False) is not pressed again after a reconnect.
+        assert loop.set_controls({CID.GAIN: 7}, keep=False) == {}
+        assert loop.wanted_controls() == {CID.FOCUS_ABSOLUTE: 40, CID.FOCUS_AUTO: 0}
+        device.present.clear()
+        wait_until(lambda: loop.stats().lost == 1, 10, what='the loss')
+        device.present.set()
+        wait_until(lambda: loop.stats().reconnects == 1, 10, what='the reconnect')
+        camera = loop.camera
+        assert (value(camera, CID.FOCUS_AUTO), value(camera, CID.FOCUS_ABSOLUTE),
+                value(camera, CID.GAIN)) == (0, 40, 0)
+    finally:
+        loop.close()
+
+
+def test_what_a_reopened_camera_refuses_is_heard_by_id():
+    device = Device()
+    heard = []
+    loop = CaptureLoop(device.open, lambda camera, frame: None, Log(), name='test',
+                       timing=FAST, on_refused=heard.append)
+    loop.open()
+    try:
+        loop.close()
+        assert loop.set_controls({CID.BRIGHTNESS: 500}) == {}   # kept, checked when it is back
+        pressed = loop.set_controls({CID.GAIN: 1}, keep=False)   # a press cannot wait
+        assert [r.why for r in pressed.values()] == [': test is not open now']
+        loop.open()
+        assert [(cid, refusal.why) for refusals in heard
+                for cid, refusal in refusals.items()] == [
+            (CID.BRIGHTNESS, ": 500 is out of the camera's range -64..64")]
     finally:
         loop.close()

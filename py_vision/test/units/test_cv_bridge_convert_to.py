@@ -30,6 +30,11 @@ OpenCV 4.6 may find a NaN norm; there (float sources, whose scale is always 1) t
 ``cv2.add(src, -0.0, dtype=...)``, which converts each element with the same functions:
 test_add_with_dtype_agrees_with_convert_to checks that on every depth pair. The expectations
 are x86's: NaN, infinities and values beyond int32 become INT_MIN, which then saturates.
+
+OpenCV converts a row shorter than two of its vectors one element at a time, and there a double
+source is scaled in double (``src[j] * alpha``), where the vector code of any longer row
+scales in float: the reference pads every row to ROW elements, so that it sees what an image of
+a camera's size gets.
 """
 
 import math
@@ -60,6 +65,13 @@ FLOAT_EDGES = [0.5, 1.5, 2.5, -0.5, -1.5, 126.5, 127.5, 128.5, -128.5, -129.5, 2
                -3e9, 1e300, -1e300, 5e-324, -0.0, np.nan, np.inf, -np.inf]
 
 
+# Elements in each row the reference converts: more than two of the widest vector (AVX-512's
+# 16 floats), see the top.
+ROW = 64
+# Products of a pixel and a scale from here on are beyond int32 and float32 (see cv_convert_to).
+HUGE_PRODUCT = 2.0 ** 1022
+
+
 def as_floats(values, dtype):
     """Return values in a float dtype, the large ones overflowing to infinity as a cast does."""
     with np.errstate(over='ignore'):
@@ -76,17 +88,29 @@ def upstream_scale(src, dst):
 
 
 def calibration(flat, scale):
-    """Return (element, alpha): an element whose magnitude is the norm, and alpha/norm == scale."""
+    """
+    Return (element, alpha): an element whose magnitude is the norm, and alpha/norm == scale.
+
+    Every product of an element of flat with scale must be below HUGE_PRODUCT.
+    """
+    if math.isinf(scale):
+        return 1, scale  # inf / any norm is inf
     top = float(np.abs(flat.astype(np.float64)).max(initial=0.0))
+    # A power of two: scale * 2**k is exact, so alpha / norm gives the scale back. At least 1
+    # (normalize takes a norm below DBL_EPSILON for 0) and at least the one that makes alpha 1
+    # or more (a subnormal alpha is inexact). Below 2 * max(top, 1, 1 / scale), alpha stays
+    # under 2 * HUGE_PRODUCT: finite.
+    power = 2 ** max(math.ceil(math.log2(max(top, 1.0))), math.ceil(-math.log2(scale)), 0)
     if flat.dtype.kind == 'f':
-        # A power of two: scale * 2**k is exact, so alpha / norm gives the scale back.
-        candidates = [2.0 ** max(0, math.ceil(math.log2(top))) if top else 1.0]
+        candidates = [power] if flat.dtype.type(power) == power else [top]
     else:
         info = np.iinfo(flat.dtype)
         # Signed types reach one further below zero (but OpenCV 4.6's norm overflows on INT_MIN).
         sign = -1 if info.min < 0 and info.bits < 32 else 1
-        candidates = (sign * m for m in range(abs(info.min) if sign < 0 else info.max,
-                                              math.ceil(top) - 1, -1))
+        largest = abs(info.min) if sign < 0 else info.max
+        # Each of these is below 2 * max(top, 1, 1 / scale) when the power of two is too large.
+        candidates = [sign * m for m in [power] if m <= largest] or (
+            sign * m for m in range(largest, math.ceil(top) - 1, -1))
     for element in candidates:
         alpha = scale * abs(element)
         for _ in range(4):
@@ -96,23 +120,41 @@ def calibration(flat, scale):
     raise AssertionError('no calibration element for scale %r over %r' % (scale, flat.dtype))
 
 
+def as_row(src, *extra):
+    """Return src's elements, then extra, in one row of at least ROW elements (padded with 0)."""
+    flat = np.append(src.ravel(), np.array(extra, src.dtype))
+    return np.append(flat, np.zeros(max(0, ROW - flat.size), src.dtype)).reshape(1, -1)
+
+
 def cv_convert_to(src, depth, scale=1.0):
     """Return what cv::Mat::convertTo(dst, CV_<depth>, scale) gives for src (see the top)."""
     flat = np.ascontiguousarray(src).reshape(1, -1)
     if flat.dtype.kind == 'f' and not np.isfinite(flat).all():
         assert scale == 1.0
-        out = cv2.add(flat, np.full_like(flat, -0.0), dtype=CV_DEPTH[depth])
-        return out.reshape(src.shape)
+        row = as_row(flat)
+        out = cv2.add(row, np.full_like(row, -0.0), dtype=CV_DEPTH[depth])
+        return out[0, :src.size].reshape(src.shape)
     if scale == 1.0:
         # alpha / norm is 1 whatever norm OpenCV finds (OpenCV 4.6 gets INT_MIN's wrong).
-        flat = np.append(flat, flat.dtype.type(1)).reshape(1, -1)
-        alpha = cv2.norm(flat, cv2.NORM_INF)
+        row = as_row(flat, 1)
+        alpha = cv2.norm(row, cv2.NORM_INF)
     else:
+        assert scale > 0
+        with np.errstate(over='ignore', invalid='ignore'):
+            products = flat.astype(np.float64) * scale
+        huge = np.abs(products) >= HUGE_PRODUCT
+        if huge.any():
+            # No finite alpha makes these a normalize: their product is beyond int32 and
+            # float32 whatever OpenCV's work type, so they convert as the product itself does.
+            out = np.empty(flat.shape, DEPTHS[depth])
+            out[huge] = cv_convert_to(products[huge], depth)
+            out[~huge] = cv_convert_to(flat[~huge], depth, scale)
+            return out.reshape(src.shape)
         element, alpha = calibration(flat, scale)
-        flat = np.append(flat, flat.dtype.type(element)).reshape(1, -1)
-        assert cv2.norm(flat, cv2.NORM_INF) == abs(element)
-    out = cv2.normalize(flat, None, alpha, 0, cv2.NORM_INF, CV_DEPTH[depth])
-    return out[0, :-1].reshape(src.shape)
+        row = as_row(flat, element)
+        assert cv2.norm(row, cv2.NORM_INF) == abs(element)
+    out = cv2.normalize(row, None, alpha, 0, cv2.NORM_INF, CV_DEPTH[depth])
+    return out[0, :src.size].reshape(src.shape)
 
 
 def assert_same(got, expected):

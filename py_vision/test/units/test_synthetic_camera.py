@@ -19,8 +19,9 @@ import time
 
 import cv2
 import numpy as np
+from py_vision.capture.pixel_formats import find
 from py_vision.capture.synthetic_device import (
-    parse_synthetic_spec, SyntheticCamera, SyntheticDevices, yuyv_max_fps)
+    bus_max_fps, parse_synthetic_spec, SyntheticCamera, SyntheticDevices)
 from py_vision.capture.synthetic_picture import (
     bgr_to_yuyv, read_frame_index, synthetic_frame, synthetic_yuyv)
 from py_vision.cv_bridge import CvBridge
@@ -60,7 +61,7 @@ def test_frames_have_the_requested_size(clock, width, height):
     assert cam.isOpened()
     assert size_of(cam) == (width, height)
     # YUYV, the format it opens in, is limited by the USB 2.0 bus.
-    assert cam.get(cv2.CAP_PROP_FPS) == min(30.0, yuyv_max_fps(width, height))
+    assert cam.get(cv2.CAP_PROP_FPS) == min(30.0, bus_max_fps(find('yuyv'), width, height))
     ok, frame = cam.read()
     assert ok
     assert frame.shape == (height, width, 3) and frame.dtype == np.uint8

@@ -64,7 +64,8 @@
 #define EXPORT __attribute__((visibility("default")))
 
 #define MAX_CAMERAS 8
-#define MAX_FORMATS 4
+#define MAX_FORMATS 24
+#define MAX_PLANES 3
 #define MAX_FRAMES 24
 #define MAX_INTERVALS 12
 #define MAX_CONTROLS 48
@@ -107,16 +108,26 @@ struct served_record {
 };
 
 struct frame_desc {
-    uint32_t width, height, sizeimage;
+    uint32_t width, height, sizeimage, bytesperline;
     uint32_t code_x, code_y, cell;        /* the frame-index code, cell 0: none */
-    char background[PATH_MAX];            /* YUYV background of this size */
+    char background[PATH_MAX];            /* YUYV background of this size, or the picture in
+                                             the format with every code cell black */
+    char white[PATH_MAX];                 /* the same with every code cell white (raw) */
     uint32_t n_intervals;
     struct v4l2_fract intervals[MAX_INTERVALS];
+};
+
+/* A raw format's plane: `across` bytes for every `per` pixels of a row, a row every `down`
+ * rows of the picture (py_vision.capture.pixel_formats.Plane). */
+struct plane_desc {
+    uint32_t across, per, down;
 };
 
 struct format_desc {
     uint32_t fourcc, flags;
     char description[32];
+    uint32_t n_planes;                     /* 0: YUYV or JPEG, made from the YUYV picture */
+    struct plane_desc planes[MAX_PLANES];
     uint32_t n_frames;
     struct frame_desc frames[MAX_FRAMES];
 };
@@ -159,6 +170,8 @@ struct camera {
     struct control_desc controls[MAX_CONTROLS];
     uint32_t corrupt_every;
     int corrupt_mode;                      /* 0 truncate, 1 garbage, 2 no EOI, 3 cycle */
+    uint32_t drop_every;                   /* every n-th frame lost on the way (no buffer) */
+    uint32_t error_every;                  /* every n-th buffer flagged V4L2_BUF_FLAG_ERROR */
     struct shared_state *state;
     struct served_record *served;          /* SERVED_SLOTS, or NULL: no served file */
     /* JPEG */
@@ -170,6 +183,7 @@ struct camera {
     int have_tables;
     struct jpeg_cache *jcache[MAX_FORMATS][MAX_FRAMES];
     uint8_t *backgrounds[MAX_FRAMES * MAX_FORMATS];
+    uint8_t *whites[MAX_FRAMES * MAX_FORMATS];    /* a raw format's picture, cells white */
     uint8_t *looks[MAX_FRAMES * MAX_FORMATS];     /* the backgrounds as the controls make them */
     uint64_t look_keys[MAX_FRAMES * MAX_FORMATS];
     pthread_mutex_t lock;                  /* backgrounds and JPEG caches */
@@ -184,6 +198,7 @@ struct buffer {
     int bg_frame;                          /* which background the buffer holds (YUYV) */
     uint64_t bg_look;                      /* and with which control values */
     int jpeg;                              /* holds a JPEG: record it when dequeued */
+    int error;                             /* flagged V4L2_BUF_FLAG_ERROR */
     uint32_t crc, flags;                   /* its CRC-32 and SERVED_CORRUPT */
     uint64_t index;                        /* the sensor's index of the frame */
 };
@@ -350,6 +365,21 @@ static void load_camera(const char *dir)
             cam->have_tables = parse_tables(cam, rest) == 0;
         } else if (!strcmp(line, "corrupt_every")) {
             cam->corrupt_every = (uint32_t)strtoul(rest, NULL, 10);
+        } else if (!strcmp(line, "drop_every")) {
+            cam->drop_every = (uint32_t)strtoul(rest, NULL, 10);
+        } else if (!strcmp(line, "error_every")) {
+            cam->error_every = (uint32_t)strtoul(rest, NULL, 10);
+        } else if (!strcmp(line, "planes") && fmt) {
+            int n = 0, used = 0;
+            struct plane_desc *pl = fmt->planes;
+            while (fmt->n_planes < MAX_PLANES
+                   && sscanf(rest + used, "%u %u %u %n", &pl[fmt->n_planes].across,
+                             &pl[fmt->n_planes].per, &pl[fmt->n_planes].down, &n) == 3) {
+                fmt->n_planes++;
+                used += n;
+            }
+        } else if (!strcmp(line, "white") && frm) {
+            copy_text(frm->white, sizeof(frm->white), rest);
         } else if (!strcmp(line, "corrupt_mode")) {
             cam->corrupt_mode = !strcmp(rest, "garbage") ? 1 : !strcmp(rest, "no_eoi") ? 2
                 : !strcmp(rest, "cycle") ? 3 : 0;
@@ -359,14 +389,16 @@ static void load_camera(const char *dir)
             char four[8] = {0};
             int n = 0;
             if (sscanf(rest, "%4s %u %n", four, &fmt->flags, &n) >= 2) {
+                for (size_t k = strlen(four); k < 4; k++)
+                    four[k] = ' ';   /* 'Y16' is V4L2's 'Y16 ' */
                 fmt->fourcc = v4l2_fourcc(four[0], four[1], four[2], four[3]);
                 copy_text(fmt->description, sizeof(fmt->description), rest + n);
             }
         } else if (!strcmp(line, "frame") && fmt && fmt->n_frames < MAX_FRAMES) {
             frm = &fmt->frames[fmt->n_frames++];
             int n = 0;
-            sscanf(rest, "%u %u %u %u %u %u %n", &frm->width, &frm->height, &frm->sizeimage,
-                   &frm->code_x, &frm->code_y, &frm->cell, &n);
+            sscanf(rest, "%u %u %u %u %u %u %u %n", &frm->width, &frm->height, &frm->sizeimage,
+                   &frm->bytesperline, &frm->code_x, &frm->code_y, &frm->cell, &n);
             copy_text(frm->background, sizeof(frm->background), rest + n);
         } else if (!strcmp(line, "interval") && frm && frm->n_intervals < MAX_INTERVALS) {
             struct v4l2_fract *iv = &frm->intervals[frm->n_intervals++];
@@ -1115,10 +1147,10 @@ static uint8_t crc8(const uint8_t *data, int n)
 #define LUMA_WHITE 235
 
 /* The 4 x 11 blocks of the synthetic camera's frame code: corners fixed, 40 data bits. */
-static void draw_code(const struct frame_desc *fd, uint8_t *yuyv, uint64_t index)
+/* Whether each cell of frame `index`'s code is white: the corners fixed, then the 32 bits of
+ * the index and its CRC-8, most significant first (py_vision's synthetic_picture). */
+static void code_cells(uint64_t index, int on[CODE_ROWS][CODE_COLS])
 {
-    if (!fd->cell)
-        return;
     uint32_t value = (uint32_t)index;
     uint8_t payload[4] = {(uint8_t)(value >> 24), (uint8_t)(value >> 16), (uint8_t)(value >> 8),
                           (uint8_t)value};
@@ -1126,19 +1158,63 @@ static void draw_code(const struct frame_desc *fd, uint8_t *yuyv, uint64_t index
     int bit = 0;
     for (int r = 0; r < CODE_ROWS; r++) {
         for (int c = 0; c < CODE_COLS; c++) {
-            int on;
             int top = r == 0, bottom = r == CODE_ROWS - 1, left = c == 0,
                 right = c == CODE_COLS - 1;
             if ((top || bottom) && (left || right))
-                on = (top && left) || (bottom && right);
+                on[r][c] = (top && left) || (bottom && right);
             else
-                on = (int)((word >> (39 - bit++)) & 1);
-            uint8_t luma = on ? LUMA_WHITE : LUMA_BLACK;
+                on[r][c] = (int)((word >> (39 - bit++)) & 1);
+        }
+    }
+}
+
+static void draw_code(const struct frame_desc *fd, uint8_t *yuyv, uint64_t index)
+{
+    if (!fd->cell)
+        return;
+    int on[CODE_ROWS][CODE_COLS];
+    code_cells(index, on);
+    for (int r = 0; r < CODE_ROWS; r++) {
+        for (int c = 0; c < CODE_COLS; c++) {
+            uint8_t luma = on[r][c] ? LUMA_WHITE : LUMA_BLACK;
             for (uint32_t y = 0; y < fd->cell; y++) {
                 uint8_t *row = yuyv + ((size_t)(fd->code_y + r * fd->cell + y) * fd->width
                                        + fd->code_x + c * fd->cell) * 2;
                 for (uint32_t x = 0; x < fd->cell; x++)
                     row[x * 2] = luma;
+            }
+        }
+    }
+}
+
+/* A raw format's code: each cell's bytes, plane by plane, from the picture with that cell
+ * white or black (the harness made both with the format's own layout). */
+static void draw_raw_code(const struct format_desc *fmt, const struct frame_desc *fd,
+                          uint8_t *out, const uint8_t *black, const uint8_t *white,
+                          uint64_t index)
+{
+    if (!fd->cell)
+        return;
+    int on[CODE_ROWS][CODE_COLS];
+    code_cells(index, on);
+    const struct plane_desc *first = &fmt->planes[0];
+    for (int r = 0; r < CODE_ROWS; r++) {
+        for (int c = 0; c < CODE_COLS; c++) {
+            const uint8_t *src = on[r][c] ? white : black;
+            uint32_t x0 = fd->code_x + c * fd->cell, y0 = fd->code_y + r * fd->cell;
+            size_t offset = 0;
+            for (uint32_t p = 0; p < fmt->n_planes; p++) {
+                const struct plane_desc *pl = &fmt->planes[p];
+                size_t stride = (size_t)fd->bytesperline * pl->across * first->per
+                    / (pl->per * first->across);
+                uint32_t rows = (fd->height + pl->down - 1) / pl->down;
+                size_t from = (size_t)x0 * pl->across / pl->per;
+                size_t to = ((size_t)(x0 + fd->cell) * pl->across + pl->per - 1) / pl->per;
+                for (uint32_t y = y0 / pl->down; y <= (y0 + fd->cell - 1) / pl->down; y++) {
+                    size_t at = offset + y * stride + from;
+                    memcpy(out + at, src + at, to - from);
+                }
+                offset += rows * stride;
             }
         }
     }
@@ -1250,6 +1326,28 @@ static const uint8_t *background_for(struct camera *cam, uint32_t fmt, uint32_t 
     pthread_mutex_unlock(&cam->lock);
     *look = key;
     return result;
+}
+
+/* A raw format's two pictures of a size (every code cell black, every cell white). */
+static void raw_pictures(struct camera *cam, uint32_t fmt, uint32_t frame,
+                         const uint8_t **black, const uint8_t **white)
+{
+    const struct frame_desc *fd = &cam->formats[fmt].frames[frame];
+    uint32_t slot = fmt * MAX_FRAMES + frame;
+    pthread_mutex_lock(&cam->lock);
+    if (!cam->backgrounds[slot]) {
+        uint8_t *b = calloc(1, fd->sizeimage), *w = calloc(1, fd->sizeimage);
+        size_t got = 0;
+        if (b)
+            read_file(fd->background, b, fd->sizeimage, &got);
+        if (w)
+            read_file(fd->white, w, fd->sizeimage, &got);
+        cam->backgrounds[slot] = b;
+        cam->whites[slot] = w;
+    }
+    *black = cam->backgrounds[slot];
+    *white = cam->whites[slot];
+    pthread_mutex_unlock(&cam->lock);
 }
 
 /* How frame `index` is broken (0 truncate, 1 garbage, 2 no EOI), or -1: it is whole. */
@@ -1366,6 +1464,18 @@ static uint32_t render_frame(struct handle *h, uint32_t b, uint64_t index)
     uint8_t *out = h->mem + (size_t)b * h->stride;
     if (fmt->fourcc == V4L2_PIX_FMT_MJPEG && cam->have_tables)
         return render_jpeg(h, out, fd->sizeimage, index);
+    if (fmt->n_planes) {
+        const uint8_t *black, *white;
+        raw_pictures(cam, h->fmt, h->frame, &black, &white);
+        if (!black || !white)
+            return 0;
+        if (h->buffers[b].bg_frame != (int)(h->fmt * MAX_FRAMES + h->frame)) {
+            memcpy(out, black, fd->sizeimage);
+            h->buffers[b].bg_frame = (int)(h->fmt * MAX_FRAMES + h->frame);
+        }
+        draw_raw_code(fmt, fd, out, black, white, index);
+        return fd->sizeimage;
+    }
     size_t size = (size_t)fd->width * fd->height * 2;
     uint64_t look;
     const uint8_t *bg = background_for(cam, h->fmt, h->frame, &look);
@@ -1434,7 +1544,9 @@ static void *producer(void *arg)
         uint64_t index = __atomic_fetch_add(&s->sensor_frames, 1, __ATOMIC_ACQ_REL);
         pthread_mutex_lock(&h->lock);
         uint32_t sequence = h->sequence++;
-        if (!h->n_queued) {           /* no buffer: the frame is lost, as in uvcvideo */
+        struct camera *cam = h->cam;
+        int lost = cam->drop_every && index % cam->drop_every == cam->drop_every - 1;
+        if (!h->n_queued || lost) {   /* no buffer, or lost on the way: as in uvcvideo */
             pthread_mutex_unlock(&h->lock);
             continue;
         }
@@ -1442,14 +1554,15 @@ static void *producer(void *arg)
         memmove(h->queued, h->queued + 1, --h->n_queued * sizeof(uint32_t));
         h->in_flight++;
         pthread_mutex_unlock(&h->lock);
+        int error = cam->error_every && index % cam->error_every == cam->error_every - 1;
         struct timespec c0, c1;
         clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
-        uint32_t used = render_frame(h, b, index);
+        uint32_t used = error ? 0 : render_frame(h, b, index);
         clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
         __atomic_fetch_add(&s->render_ns, (uint64_t)((c1.tv_sec - c0.tv_sec) * 1000000000LL
                                                      + (c1.tv_nsec - c0.tv_nsec)),
                            __ATOMIC_ACQ_REL);
-        int jpeg = h->cam->served && h->cam->have_tables
+        int jpeg = !error && h->cam->served && h->cam->have_tables
             && h->cam->formats[h->fmt].fourcc == V4L2_PIX_FMT_MJPEG;
         uint32_t crc = jpeg ? crc32_of(h->mem + (size_t)b * h->stride, used) : 0;
         struct timeval tv = {(time_t)due, (suseconds_t)((due - (time_t)due) * 1e6)};
@@ -1459,6 +1572,7 @@ static void *producer(void *arg)
         buf->sequence = sequence;
         buf->timestamp = tv;
         buf->jpeg = jpeg;
+        buf->error = error;
         buf->crc = crc;
         buf->flags = corrupt_mode_of(h->cam, index) >= 0 ? SERVED_CORRUPT : 0;
         buf->index = index;
@@ -1824,7 +1938,7 @@ static void fill_pix(struct camera *cam, uint32_t f, uint32_t fr, struct v4l2_pi
     pix->height = fd->height;
     pix->pixelformat = fmt->fourcc;
     pix->field = V4L2_FIELD_NONE;
-    pix->bytesperline = (fmt->flags & V4L2_FMT_FLAG_COMPRESSED) ? 0 : fd->width * 2;
+    pix->bytesperline = fd->bytesperline;
     pix->sizeimage = fd->sizeimage;
     pix->colorspace = V4L2_COLORSPACE_SRGB;
 }
@@ -1930,6 +2044,8 @@ static void fill_buffer(struct handle *h, uint32_t i, struct v4l2_buffer *b)
         b->flags |= V4L2_BUF_FLAG_QUEUED;
     if (buf->state == BUF_DONE)
         b->flags |= V4L2_BUF_FLAG_DONE;
+    if (buf->error)
+        b->flags |= V4L2_BUF_FLAG_ERROR;
     b->bytesused = buf->bytesused;
     b->sequence = buf->sequence;
     b->timestamp = buf->timestamp;

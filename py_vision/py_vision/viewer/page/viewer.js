@@ -114,10 +114,17 @@
         option.textContent = m.label;
         input.appendChild(option);
       });
+    } else if (c.button) {
+      // A button: pressing sends true; the camera's node reads it back false.
+      value.hidden = true;
+      input = document.createElement("button");
+      input.type = "button";
+      input.textContent = "press";
     } else if (c.type === "bool") {
       input = document.createElement("input");
       input.type = "checkbox";
-    } else if (typeof c.min === "number" && typeof c.max === "number") {
+    } else if (typeof c.min === "number" && typeof c.max === "number" &&
+               c.max - c.min <= Number.MAX_SAFE_INTEGER) {
       input = document.createElement("input");
       input.type = "range";
       input.min = c.min;
@@ -131,9 +138,11 @@
     input.disabled = c.read_only;
     label.htmlFor = input.id = "input-" + name;
     input.addEventListener("pointerdown", function () { busy[name] = true; });
-    input.addEventListener(input.type === "range" ? "input" : "change", function () {
+    const changed = c.button ? "click" : (input.type === "range" ? "input" : "change");
+    input.addEventListener(changed, function () {
       let v;
-      if (input.type === "checkbox") { v = input.checked; }
+      if (c.button) { v = true; }
+      else if (input.type === "checkbox") { v = input.checked; }
       else if (c.type === "integer") { v = parseInt(input.value, 10); }
       else if (c.type === "double") { v = parseFloat(input.value); }
       else { v = input.value; }
@@ -198,7 +207,7 @@
     });
     const key = JSON.stringify(Object.keys(controls).map(function (n) {
       const c = controls[n];
-      return [n, c.type, c.min, c.max, c.step, c.menu, c.read_only, c.group];
+      return [n, c.type, c.min, c.max, c.step, c.menu, c.read_only, c.group, c.button];
     }));
     if (key !== layout) {
       layout = key;

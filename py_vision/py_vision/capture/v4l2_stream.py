@@ -1,0 +1,339 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+V4L2 cameras streamed by py_vision itself: memory-mapped buffers, one frame at a time.
+
+`V4L2Source` is the FrameSource of a V4L2 capture device. `configure` sets the pixel format
+and size (VIDIOC_S_FMT) and the frame interval (VIDIOC_S_PARM) and reads back what the driver
+chose; `start` asks for buffers once (VIDIOC_REQBUFS), maps each (VIDIOC_QUERYBUF, mmap),
+queues them all (VIDIOC_QBUF) and starts the stream (VIDIOC_STREAMON); `next_frame` waits with
+poll() for a filled buffer and takes it (VIDIOC_DQBUF), handing out a view of its bytes: only
+`bytesused` of them, stamped with the buffer's time when the driver says it is CLOCK_MONOTONIC
+(time.monotonic()'s clock), numbered by its sequence. The buffer goes back to the driver at the
+next `next_frame()`, so a frame is converted straight from the driver's memory and never
+copied on the way. `stop` ends the stream (VIDIOC_STREAMOFF) and keeps the device, its buffers
+and its controls, so that `start` resumes at once and nobody else can take the camera
+meanwhile; `release` gives everything back.
+
+Structures are laid out from include/uapi/linux/videodev2.h with the machine's own alignment
+(`struct v4l2_buffer` holds a `struct timeval` of two longs and a union with a pointer: 88
+bytes on x86-64 and aarch64).
+"""
+
+import errno
+import fcntl
+from fractions import Fraction
+import mmap
+import os
+import select
+import struct
+import time
+from typing import List, Optional
+
+import numpy as np
+from py_vision.capture.controls import ControlInfo
+from py_vision.capture.pixel_formats import fourcc_text, PixelFormat
+from py_vision.capture.source import Frame, FrameFormat, StreamFormat
+from py_vision.capture.v4l2 import (
+    _ioc, _REQBUFS, BUF_TYPE_VIDEO_CAPTURE, CAP_VIDEO_CAPTURE, MEMORY_MMAP, open_problem,
+    V4L2Device, V4L2Error, VIDIOC_REQBUFS)
+
+__all__ = ['STREAM_PROBLEMS', 'V4L2Source']
+
+# struct v4l2_format for a single-planar capture: type, then a 200-byte union aligned for its
+# pointer members, of which struct v4l2_pix_format: width height pixelformat field
+# bytesperline sizeimage colorspace priv flags ycbcr_enc quantization xfer_func.
+_FORMAT = struct.Struct('@I0P12I152x')
+# struct v4l2_streamparm: type, then struct v4l2_captureparm (capability capturemode
+# timeperframe extendedmode readbuffers reserved[4]) in a 200-byte union.
+_STREAMPARM = struct.Struct('=I6I16x160x')
+# struct v4l2_buffer: index type bytesused flags field, struct timeval, struct v4l2_timecode
+# (type flags frames seconds minutes hours userbits[4]), sequence memory, the union m (offset
+# or a pointer), length reserved2 request_fd.
+_BUFFER = struct.Struct('@5Ill2I8B2IL3I0l')
+_WRITE, _READ_WRITE = 1, 3
+VIDIOC_G_FMT = _ioc(_READ_WRITE, 4, _FORMAT.size)
+VIDIOC_S_FMT = _ioc(_READ_WRITE, 5, _FORMAT.size)
+VIDIOC_QUERYBUF = _ioc(_READ_WRITE, 9, _BUFFER.size)
+VIDIOC_QBUF = _ioc(_READ_WRITE, 15, _BUFFER.size)
+VIDIOC_DQBUF = _ioc(_READ_WRITE, 17, _BUFFER.size)
+VIDIOC_STREAMON = _ioc(_WRITE, 18, 4)
+VIDIOC_STREAMOFF = _ioc(_WRITE, 19, 4)
+VIDIOC_G_PARM = _ioc(_READ_WRITE, 21, _STREAMPARM.size)
+VIDIOC_S_PARM = _ioc(_READ_WRITE, 22, _STREAMPARM.size)
+
+CAP_STREAMING = 0x04000000
+BUF_FLAG_ERROR = 0x0040
+BUF_FLAG_TIMESTAMP_MASK = 0xE000
+BUF_FLAG_TIMESTAMP_MONOTONIC = 0x2000
+FIELD_ANY = 0
+BUFFERS = 4
+# Where _BUFFER's values hold each field, and where `memory` lies in the structure.
+_INDEX, _BYTESUSED, _FLAGS, _SEC, _USEC, _SEQUENCE, _OFFSET, _LENGTH = 0, 2, 3, 5, 6, 17, 19, 20
+_MEMORY_AT = struct.calcsize('@5Ill2I8BI')
+_STREAM_TYPE = struct.pack('=I', BUF_TYPE_VIDEO_CAPTURE)
+
+# Why a stream does not start, by errno, where open_problem's words would not tell a user.
+STREAM_PROBLEMS = {
+    errno.ENOMEM: 'the driver has no memory for the buffers',
+}
+
+
+def _stream_error(call: str, error: OSError) -> V4L2Error:
+    """Return the one-line reason a call that starts streaming failed."""
+    code = error.errno
+    words = STREAM_PROBLEMS.get(code) or open_problem(code)
+    return V4L2Error('streaming does not start (%s: %s)' % (call, words), code)
+
+
+class V4L2Source:
+    """A V4L2 capture device streamed with mmap buffers (see the module's text)."""
+
+    def __init__(self, path: str):
+        self.device = V4L2Device(path)
+        if not self.device.caps & CAP_VIDEO_CAPTURE:
+            self.device.close()
+            raise V4L2Error('a multi-planar capture device (py_vision streams single-planar '
+                            'ones)')
+        if not self.device.caps & CAP_STREAMING:
+            self.device.close()
+            raise V4L2Error('it cannot stream (no V4L2 streaming I/O)')
+        self._fd = self.device.fd
+        self._maps: List[mmap.mmap] = []
+        self._held: Optional[int] = None        # the buffer the last frame's bytes are in
+        self._streaming = False
+        self._format: Optional[StreamFormat] = None
+        self._pixel_format: Optional[PixelFormat] = None
+        self._timeout_ms = 1000
+        self._wake_read, self._wake_write = os.pipe2(os.O_NONBLOCK | os.O_CLOEXEC)
+        self._poll = select.poll()
+        self._poll.register(self._fd, select.POLLIN | select.POLLPRI)
+        self._poll.register(self._wake_read, select.POLLIN)
+        self._buffer = bytearray(_BUFFER.size)
+
+    # --- formats and controls: the device's own answers ------------------------------------
+
+    def formats(self) -> List[FrameFormat]:
+        """Return what the device offers."""
+        return self.device.formats()
+
+    def controls(self) -> List[ControlInfo]:
+        """Return the device's controls with their current values."""
+        return self.device.controls()
+
+    def set_control(self, cid: int, value: int) -> Optional[str]:
+        """Set a device control through the driver."""
+        return self.device.set_control(cid, value)
+
+    # --- configuring ----------------------------------------------------------------------
+
+    def configure(self, pixel_format: PixelFormat, width: int, height: int,
+                  fps: float) -> StreamFormat:
+        """Ask for a format, size and rate; return what the driver gives. V4L2Error if none."""
+        self._free_buffers()
+        request = bytearray(_FORMAT.pack(BUF_TYPE_VIDEO_CAPTURE, width, height,
+                                         pixel_format.code, FIELD_ANY, *(0,) * 8))
+        try:
+            fcntl.ioctl(self._fd, VIDIOC_S_FMT, request)
+        except OSError as error:
+            raise V4L2Error(open_problem(error.errno), error.errno) from None
+        _, width, height, code, _, bytesperline, *_ = _FORMAT.unpack(request)
+        rate = self._set_rate(fps)
+        self._format = StreamFormat(fourcc_text(code), width, height, rate or fps, bytesperline)
+        self._pixel_format = self._format.pixel_format
+        # A frame comes within a few periods of a slow camera, within a second of any other.
+        self._timeout_ms = int(1000 * max(1.0, 3.0 / max(rate or fps, 1e-3)))
+        return self._format
+
+    def _set_rate(self, fps: float) -> float:
+        """Ask for a frame interval of 1/fps; return the rate the driver gives (0: unknown)."""
+        interval = Fraction(1.0 / fps).limit_denominator(100000)
+        request = bytearray(_STREAMPARM.pack(BUF_TYPE_VIDEO_CAPTURE, 0, 0, interval.numerator,
+                                             interval.denominator, 0, 0))
+        try:
+            fcntl.ioctl(self._fd, VIDIOC_S_PARM, request)
+        except OSError:
+            request = bytearray(_STREAMPARM.pack(BUF_TYPE_VIDEO_CAPTURE, *(0,) * 6))
+            try:   # a driver without a settable interval may still tell its own
+                fcntl.ioctl(self._fd, VIDIOC_G_PARM, request)
+            except OSError:
+                return 0.0
+        _, _, _, numerator, denominator, _, _ = _STREAMPARM.unpack(request)
+        return denominator / numerator if numerator and denominator else 0.0
+
+    # --- streaming ------------------------------------------------------------------------
+
+    def start(self) -> None:
+        """Start streaming: buffers asked for and mapped once, all queued; V4L2Error if not."""
+        if self._streaming:
+            return
+        if not self._maps:
+            self._map_buffers()
+        try:
+            for index in range(len(self._maps)):
+                self._queue(index)
+        except OSError as error:
+            raise _stream_error('VIDIOC_QBUF', error) from None
+        try:
+            fcntl.ioctl(self._fd, VIDIOC_STREAMON, _STREAM_TYPE)
+        except OSError as error:
+            raise _stream_error('VIDIOC_STREAMON', error) from None
+        self._held = None
+        self._streaming = True
+
+    def _map_buffers(self):
+        request = bytearray(_REQBUFS.pack(BUFFERS, BUF_TYPE_VIDEO_CAPTURE, MEMORY_MMAP, 0, 0))
+        try:
+            fcntl.ioctl(self._fd, VIDIOC_REQBUFS, request)
+        except OSError as error:
+            raise _stream_error('VIDIOC_REQBUFS', error) from None
+        count = _REQBUFS.unpack(request)[0]
+        if count < 2:
+            raise V4L2Error('cannot stream: the driver gives %d buffer(s), 2 are needed'
+                            % count)
+        try:
+            for index in range(count):
+                info = bytearray(_BUFFER.size)
+                struct.pack_into('=II', info, 0, index, BUF_TYPE_VIDEO_CAPTURE)
+                struct.pack_into('=I', info, _MEMORY_AT, MEMORY_MMAP)
+                fcntl.ioctl(self._fd, VIDIOC_QUERYBUF, info)
+                fields = _BUFFER.unpack(info)
+                self._maps.append(mmap.mmap(self._fd, fields[_LENGTH], mmap.MAP_SHARED,
+                                            mmap.PROT_READ, offset=fields[_OFFSET]))
+        except OSError as error:
+            self._free_buffers()
+            raise _stream_error('mapping the buffers', error) from None
+
+    def _queue(self, index: int) -> None:
+        buffer = bytearray(_BUFFER.size)
+        struct.pack_into('=II', buffer, 0, index, BUF_TYPE_VIDEO_CAPTURE)
+        struct.pack_into('=I', buffer, _MEMORY_AT, MEMORY_MMAP)
+        fcntl.ioctl(self._fd, VIDIOC_QBUF, buffer)
+
+    def stop(self) -> None:
+        """Stop streaming (VIDIOC_STREAMOFF); the device, its buffers and controls are kept."""
+        if not self._streaming:
+            return
+        self._streaming = False
+        self._held = None   # STREAMOFF takes every buffer back
+        try:
+            fcntl.ioctl(self._fd, VIDIOC_STREAMOFF, _STREAM_TYPE)
+        except OSError:
+            pass   # an unplugged device has stopped anyway
+
+    def next_frame(self) -> Optional[Frame]:
+        """
+        Wait for the next filled buffer and return its frame; None when none came or it failed.
+
+        The previous frame's buffer goes back to the driver first. A buffer the driver flagged
+        as an error comes back as a Frame with `error` set (and no data).
+        """
+        if not self._streaming:
+            return None
+        if self._held is not None:
+            held, self._held = self._held, None
+            try:
+                self._queue(held)
+            except OSError:
+                return None
+        buffer = self._buffer
+        deadline = None
+        while True:
+            struct.pack_into('=II', buffer, 4, BUF_TYPE_VIDEO_CAPTURE, 0)
+            struct.pack_into('=I', buffer, _MEMORY_AT, MEMORY_MMAP)
+            try:
+                fcntl.ioctl(self._fd, VIDIOC_DQBUF, buffer)
+                break
+            except BlockingIOError:
+                pass
+            except OSError:
+                return None   # unplugged, or the stream failed for good
+            now = time.monotonic()
+            deadline = deadline or now + self._timeout_ms / 1000.0
+            if now >= deadline or not self._wait(deadline - now):
+                return None
+        return self._frame(_BUFFER.unpack(buffer))
+
+    def _wait(self, seconds: float) -> bool:
+        """Wait for the device to be readable; False when interrupted, on an error or timeout."""
+        events = self._poll.poll(max(1, int(seconds * 1000)))
+        for fd, _ in events:
+            if fd == self._wake_read:
+                try:
+                    os.read(self._wake_read, 64)
+                except BlockingIOError:
+                    pass
+                return False
+        return any(revents & select.POLLIN for _, revents in events)
+
+    def _frame(self, fields) -> Frame:
+        index, flags = fields[_INDEX], fields[_FLAGS]
+        captured = None
+        if flags & BUF_FLAG_TIMESTAMP_MASK == BUF_FLAG_TIMESTAMP_MONOTONIC:
+            captured = fields[_SEC] + fields[_USEC] / 1e6
+        stream, pixel_format = self._format, self._pixel_format
+        frame = Frame(fields[_SEQUENCE], captured, pixel_format, stream.width, stream.height,
+                      bytesperline=stream.bytesperline)
+        if flags & BUF_FLAG_ERROR:
+            frame.error = True
+            self._queue_back(index)
+            return frame
+        self._held = index
+        used = min(fields[_BYTESUSED], len(self._maps[index]))
+        frame.data = np.frombuffer(self._maps[index], np.uint8, used)
+        if not pixel_format.compressed and used < pixel_format.frame_bytes(
+                stream.width, stream.height, stream.bytesperline):
+            frame.corrupt = True   # a raw frame cut short
+        return frame
+
+    def _queue_back(self, index: int) -> None:
+        try:
+            self._queue(index)
+        except OSError:
+            pass   # the next DQBUF says what is wrong
+
+    def interrupt(self) -> None:
+        """End a next_frame() waiting in another thread (or the next one) at once."""
+        try:
+            os.write(self._wake_write, b'x')
+        except (BlockingIOError, OSError):
+            pass
+
+    def release(self) -> None:
+        """Stop streaming and give the buffers and the device back."""
+        if self.device.fd is None:
+            return
+        self.stop()
+        self._free_buffers()
+        self.device.close()
+        os.close(self._wake_read)
+        os.close(self._wake_write)
+
+    def _free_buffers(self) -> None:
+        self.stop()
+        if not self._maps:
+            return
+        for mapped in self._maps:
+            try:
+                mapped.close()
+            except BufferError:
+                pass   # a frame still holds a view: unmapped when it goes
+        self._maps = []
+        try:
+            fcntl.ioctl(self._fd, VIDIOC_REQBUFS, bytearray(_REQBUFS.pack(
+                0, BUF_TYPE_VIDEO_CAPTURE, MEMORY_MMAP, 0, 0)))
+        except OSError:
+            pass
