@@ -161,7 +161,7 @@ def emulated_camera():
 
 @pytest.fixture(scope='session')
 def vivid_session():
-    """The session's vivid VM (vivid_vm.SessionVm), powered off when the session ends."""
+    """Give the session's vivid VM (vivid_vm.SessionVm), powered off when the session ends."""
     session = SessionVm()
     yield session
     session.close()

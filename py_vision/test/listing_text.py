@@ -16,8 +16,8 @@
 
 import re
 
-# A format's line: its four characters (spaces and a big-endian mark included), its name.
-FORMAT_LINE = re.compile(r'^(\S.{0,3}) \((.*)\)$')
+# A format's line: its FourCC as printed, its name, what the publisher gives of it.
+FORMAT_LINE = re.compile(r'^(\S[^(]{0,7}?) \(([^()]*)\)(?:, (.*))?$')
 # One size and its rates: "  1280x720: 10, 5 fps".
 SIZE_LINE = re.compile(r'^  (\d+)x(\d+): ([\d., ]+) fps$')
 
@@ -27,7 +27,7 @@ def formats(output):
     found = []
     for line in output.splitlines():
         header = FORMAT_LINE.match(line)
-        if header and not line.startswith('controls'):
+        if header:
             found.append((header.group(1), header.group(2), {}))
             continue
         size = SIZE_LINE.match(line)

@@ -82,7 +82,7 @@ def fourcc(code):
 
 
 def fourcc_text(number):
-    """
+    r"""
     Return the four-character code of a V4L2 pixel format number.
 
     Decoded as latin-1: a big-endian variant has bit 31 set ('Y16 ' | 1 << 31 is 'Y16\xa0').

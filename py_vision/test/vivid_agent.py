@@ -57,7 +57,6 @@ import v4l2_ioctl
 POLL_S = 0.05
 SYSFS_DRIVER = Path('/sys/bus/platform/drivers/vivid')
 VIDEO4LINUX = Path('/sys/class/video4linux')
-CTRL_TYPE_INTEGER_MENU = 9
 
 
 def log(message):
@@ -203,7 +202,7 @@ class Vm:
 
     @property
     def peer(self):
-        """An in-process rclpy node on this function's domain (made at first use)."""
+        """Return an in-process rclpy node on this function's domain, made at first use."""
         if self._peer is None:
             self._peer = ros_harness.RosPeer(self.domain_id)
         return self._peer
@@ -231,32 +230,38 @@ class Vm:
         return found
 
     def controls(self):
-        """Every control the device lists (VIDIOC_QUERY_EXT_CTRL), menus with their entries."""
+        """
+        Return every control the device lists (VIDIOC_QUERY_EXT_CTRL), classes too.
+
+        A menu's entries are in `menu` ({index: name}), an integer menu's too ({index: value}).
+        """
         found = []
         with self._open() as fd:
-            for control in v4l2_ioctl.list_controls(fd):
-                info = v4l2_ioctl.query_ext_control(fd, control['id'])
-                if info['type'] in (v4l2_ioctl.CTRL_TYPE_MENU, CTRL_TYPE_INTEGER_MENU):
+            for info in v4l2_ioctl.list_ext_controls(fd):
+                if info['type'] in (v4l2_ioctl.CTRL_TYPE_MENU,
+                                    v4l2_ioctl.CTRL_TYPE_INTEGER_MENU):
                     info['menu'] = menu_entries(fd, info)
                 found.append(info)
         return found
 
-    def _control_id(self, fd, name):
-        from py_vision.capture.controls import param_name
-        for control in v4l2_ioctl.list_controls(fd):
+    def _control(self, fd, name):
+        from py_vision.control_names import param_name
+        for control in v4l2_ioctl.list_ext_controls(fd):
             if name in (control['name'], param_name(control['name'])):
-                return control['id']
+                return control['id'], control['type'] == v4l2_ioctl.CTRL_TYPE_INTEGER64
         raise AssertionError('%s has no control %r' % (self.device, name))
 
     def control(self, name):
-        """Return a control's current value on the device (VIDIOC_G_CTRL), by name."""
+        """Return a control's current value on the device (VIDIOC_G_EXT_CTRLS), by name."""
         with self._open() as fd:
-            return v4l2_ioctl.get_control(fd, self._control_id(fd, name))
+            cid, wide = self._control(fd, name)
+            return v4l2_ioctl.get_ext_controls(fd, [cid], wide)[0]
 
     def set_control(self, name, value=0):
-        """Set a control on the device (VIDIOC_S_CTRL), by name; a button is pressed."""
+        """Set a control on the device (VIDIOC_S_EXT_CTRLS), by name; a button is pressed."""
         with self._open() as fd:
-            return v4l2_ioctl.set_control(fd, self._control_id(fd, name), value)
+            cid, wide = self._control(fd, name)
+            return v4l2_ioctl.set_ext_controls(fd, [(cid, value)], wide)[0]
 
     def unplug(self):
         """Unbind the driver from the device, as an unplug: the /dev node vanishes."""
@@ -288,11 +293,13 @@ class Vm:
 
 
 def menu_entries(fd, info):
-    """Return {index: name} of a menu control's entries (those the driver has)."""
+    """Return {index: name, or value for an integer menu} of the entries the driver has."""
+    query = v4l2_ioctl.query_int_menu if info['type'] == v4l2_ioctl.CTRL_TYPE_INTEGER_MENU \
+        else v4l2_ioctl.query_menu
     entries = {}
     for index in range(info['min'], info['max'] + 1):
         with contextlib.suppress(OSError):
-            entries[index] = v4l2_ioctl.query_menu(fd, info['id'], index)
+            entries[index] = query(fd, info['id'], index)
     return entries
 
 

@@ -66,14 +66,14 @@ HOST_VIEW = '/run/py_vision_host'
 # Python start-up takes minutes: so the host's root is shared once more, mounted again with
 # cache=loose, and the directories Python and the package live in are bound from there over
 # their own paths. Then the agent starts, in the environment env.sh gives (see _agent_env).
-BOOT = '''set -e
+BOOT = """set -e
 tag=$(awk '$2 == "{view}" {{print $1}}' /proc/mounts)
 umount {view}
 mount -t 9p -o ro,trans=virtio,version=9p2000.L,msize=512000,cache=loose "$tag" {view}
 for path in {binds}; do mount --bind "{view}$path" "$path"; done
 . {shared}/env.sh
 exec {python} {agent} {shared}
-'''
+"""
 
 
 class VmUnavailable(RuntimeError):
@@ -129,7 +129,7 @@ def missing():
 
 
 def host_paths():
-    """The directories the VM must read with its page cache on: Python's and the package's."""
+    """Return the directories the VM reads with its page cache on: Python's, the package's."""
     paths = sorted({os.path.realpath(p) for p in (
         sys.prefix, sys.base_prefix, ros_harness.REPO, ros_harness.PREFIX.parent)})
     # A directory inside another is already there once the outer one is bound.

@@ -29,7 +29,7 @@ returns what they did; the assertions are made here.
 from listing_text import control_line, formats
 import numpy as np
 from param_client import describe_parameters
-from py_vision.capture.controls import param_name
+from py_vision.control_names import param_name
 from rcl_interfaces.msg import ParameterType
 from ros_harness import wait_until
 from sensor_msgs.msg import Image
@@ -37,10 +37,23 @@ import v4l2_ioctl
 
 NODE = 'usbcam_publisher'
 CTRL_READ_ONLY = v4l2_ioctl.CTRL_FLAG_READ_ONLY
-# The control types that are parameters today, and the ROS type each becomes.
-PARAMETER_TYPES = {v4l2_ioctl.CTRL_TYPE_INTEGER: ParameterType.PARAMETER_INTEGER,
-                   v4l2_ioctl.CTRL_TYPE_BOOLEAN: ParameterType.PARAMETER_BOOL,
-                   v4l2_ioctl.CTRL_TYPE_MENU: ParameterType.PARAMETER_INTEGER}
+INTEGER, BOOLEAN, MENU, BUTTON, INTEGER64, BITMASK, INTEGER_MENU = (
+    v4l2_ioctl.CTRL_TYPE_INTEGER, v4l2_ioctl.CTRL_TYPE_BOOLEAN, v4l2_ioctl.CTRL_TYPE_MENU,
+    v4l2_ioctl.CTRL_TYPE_BUTTON, v4l2_ioctl.CTRL_TYPE_INTEGER64, v4l2_ioctl.CTRL_TYPE_BITMASK,
+    v4l2_ioctl.CTRL_TYPE_INTEGER_MENU)
+# The control types one number sets, and the parameter type each becomes (a button: true
+# presses it).
+PARAMETER_TYPES = {INTEGER: ParameterType.PARAMETER_INTEGER,
+                   BOOLEAN: ParameterType.PARAMETER_BOOL,
+                   MENU: ParameterType.PARAMETER_INTEGER,
+                   BUTTON: ParameterType.PARAMETER_BOOL,
+                   INTEGER64: ParameterType.PARAMETER_INTEGER,
+                   BITMASK: ParameterType.PARAMETER_INTEGER,
+                   INTEGER_MENU: ParameterType.PARAMETER_INTEGER}
+# How --list-formats names each type, and the parameters' ranges (the rest have none).
+LISTED_AS = {INTEGER: 'int', BOOLEAN: 'bool', MENU: 'menu', BUTTON: 'button',
+             INTEGER64: 'int64', BITMASK: 'bitmask', INTEGER_MENU: 'integer menu'}
+RANGED = (INTEGER, INTEGER64, MENU, INTEGER_MENU)
 # vivid's test_pattern menu entry "100% Colorbar": white, yellow, cyan, green, magenta, red,
 # blue and black bars (BGR), left to right, each an eighth of the width; osd_text_mode 2
 # ("None") leaves the text off the picture.
@@ -84,7 +97,7 @@ def stream(vm, params, count=3, names=()):
 
 
 def parameters(vm):
-    """The publisher's descriptors of the controls the kernel lists as parameter types."""
+    """Return the publisher's descriptors of the controls one number sets, and the controls."""
     controls = [c for c in vm.controls() if c['type'] in PARAMETER_TYPES]
     node = vm.launch(NODE, params=dict(STREAM, video_device=vm.device))
     node.wait_for_output('opened', 120)
@@ -113,12 +126,15 @@ def test_list_formats_shows_every_format_size_rate_and_control_vivid_offers(vivi
             {size: sorted(rates) for size, rates in sizes.items()}, description
     assert len(printed) == len(got['formats'])
     for control in got['controls']:
-        if control['type'] not in PARAMETER_TYPES:
+        if control['type'] == v4l2_ioctl.CTRL_TYPE_CTRL_CLASS:
             continue
         line = control_line(out, param_name(control['name']))
         assert line is not None, 'control %s not listed:\n%s' % (control['name'], out)
-        assert '0x%08x' % control['id'] in line
-        if control['type'] == v4l2_ioctl.CTRL_TYPE_INTEGER:
+        if control['type'] not in PARAMETER_TYPES:  # a string
+            assert line.endswith('not a parameter'), line
+            continue
+        assert '(0x%08x): %s' % (control['id'], LISTED_AS[control['type']]) in line, line
+        if control['type'] in (INTEGER, INTEGER64):
             assert '%d..%d' % (control['min'], control['max']) in line, line
         for index, name in control.get('menu', {}).items():
             assert '%d=%s' % (index, name) in line, line
@@ -135,9 +151,10 @@ def test_yuyv_colour_bars_arrive_with_their_colours(vivid):
                 'bar %d is %s, not %s' % (bar, found, expected))
 
 
-# Values other than each control's default, of every type that is a parameter today.
+# Values other than each control's default, of every type one number sets (but a button).
 GIVEN = {'brightness': 200, 'contrast': 90, 'hue': -20, 'horizontal_flip': True,
-         'gain_automatic': False, 'gain': 77, 'menu': 4, 'integer_32_bits': -123456}
+         'gain_automatic': False, 'gain': 77, 'menu': 4, 'integer_32_bits': -123456,
+         'integer_64_bits': 2**40 + 3, 'integer_menu': 4, 'bitmask': 0x00400010}
 
 
 def test_controls_given_on_the_command_line_reach_the_device(vivid):
@@ -154,9 +171,9 @@ def test_vivids_controls_are_parameters_with_its_ranges_and_menus(vivid):
         assert kind == PARAMETER_TYPES[control['type']], name
         assert read_only == bool(control['flags'] & CTRL_READ_ONLY), name
         assert description.startswith(control['name']), (name, description)
-        if control['type'] == v4l2_ioctl.CTRL_TYPE_BOOLEAN:
-            assert not ranges, name
-        else:
+        if control['type'] in RANGED:
             assert ranges == [(control['min'], control['max'], control['step'])], name
+        elif control['type'] in (BOOLEAN, BUTTON):
+            assert not ranges, name
         for index, entry in control.get('menu', {}).items():
             assert '%d=%s' % (index, entry) in description, (name, description)
