@@ -53,7 +53,8 @@ from py_vision.calibration import CameraInfoManager, is_valid_camera_name
 from py_vision.camera_diagnostics import CameraMonitor
 from py_vision.capture import (
     Camera, CaptureLoop, pixel_format_accepted, SourceError, SyntheticDevices)
-from py_vision.capture.listing import device_listing
+from py_vision.capture.devices import AUTO
+from py_vision.capture.listing import device_listing, devices_listing
 from py_vision.capture.pixel_formats import names_accepted
 from py_vision.control_names import pixel_format_fourcc, USB_CAM_PIXEL_FORMATS
 from py_vision.control_params import ALIAS_HELP, ControlParameters
@@ -104,10 +105,12 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
                'sensor_msgs/Image on usb_camera/image, JPEG on usb_camera/image/compressed '
                'and CameraInfo on usb_camera/camera_info. Every control the camera reports is '
                "a parameter too, with the camera's range (ros2 param describe); "
-               '--list-formats prints what the camera offers and exits.')
+               '--list-formats prints what the camera offers and exits, --list-devices every '
+               'video device.')
     OWN_PARAMETERS = (
         Spec('video_device', '/dev/video0',
-             'V4L2 device path, OpenCV camera index, video file, or "synthetic[?options]"',
+             'V4L2 device path, camera index, auto (the first USB camera), video file, or '
+             '"synthetic[?options]"',
              check=bool, accepted='a device path, an index, a file or synthetic'),
         Spec('image_width', 640, 'requested frame width in pixels', (1, 8192)),
         Spec('image_height', 480, 'requested frame height in pixels', (1, 8192)),
@@ -287,8 +290,11 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         """Open the camera the parameters name (called by the capture loop at each (re)open)."""
         camera = Camera.open(self.video_device, self.size[0], self.size[1], self.framerate,
                              self.pixel_format, synthetic=self._synthetic)
+        where = self.video_device
+        if where.strip().lower() == AUTO:
+            where = '%s (%s)' % (where, camera.node)
         self.get_logger().info('opened %s: %s, publishing on %s' % (
-            self.video_device, camera.describe(), self.images.raw.topic_name))
+            where, camera.describe(), self.images.raw.topic_name))
         for line in camera.notes:
             self.get_logger().warning(line)
         return camera
@@ -506,7 +512,13 @@ def list_formats(argv):
     return 0
 
 
-USBImagePublisher.COMMANDS = {'--list-formats': list_formats}
+def list_devices(argv):
+    """Print every video device in one line each (--list-devices); return the exit status."""
+    sys.stdout.write(devices_listing())
+    return 0
+
+
+USBImagePublisher.COMMANDS = {'--list-formats': list_formats, '--list-devices': list_devices}
 
 
 main = main_for(USBImagePublisher)
