@@ -51,6 +51,7 @@ CAMERA_ARGUMENTS = {'params_file', 'video_device', 'image_width', 'image_height'
 PROMISED = {
     'camera.launch.py': CAMERA_ARGUMENTS,
     'pipeline.launch.py': CAMERA_ARGUMENTS | {'display', 'web_host', 'web_port', 'web_token'},
+    'two_cameras.launch.py': CAMERA_ARGUMENTS | {'front_device', 'rear_device'},
 }
 TOKEN = 'launch-test-token-0123456789'
 # Generous: Humble's launch, three nodes and their DDS discovery on a loaded 2-core machine.
@@ -80,12 +81,12 @@ def parameters(peer, node, names):
 
 
 def stops_cleanly(proc, nodes):
-    """Ctrl-C the launch: it and every node it started end cleanly (status 0)."""
+    """Ctrl-C the launch: it and every node it started (names, repeated) end cleanly."""
     assert proc.stop(timeout=20.0) == 0, proc.tail()
     output = proc.output()
-    for node in nodes:
-        assert re.search(r'\[%s-\d+\]: process has finished cleanly' % node, output), \
-            proc.tail()
+    for node in set(nodes):
+        assert len(re.findall(r'\[%s-\d+\]: process has finished cleanly' % node, output)) \
+            == nodes.count(node), proc.tail()
 
 
 def test_the_launch_files_are_installed():
@@ -207,3 +208,16 @@ def test_pipeline_viewer_arguments_reach_the_viewer(ros2_launch, peer):
     assert parameters(peer, 'cv_bridge_test', ['display']) == {'display': 'none'}
     wait_until(lambda: len(processed) >= 3, START_S, what='processed frames')
     stops_cleanly(proc, ['usbcam_publisher', 'cv_bridge_test', 'usbcam_subscriber'])
+
+
+@needs_launch
+def test_two_cameras_each_in_its_namespace_with_its_device(ros2_launch, peer):
+    front = peer.collect(Image, '/front/usb_camera/image')
+    rear = peer.collect(Image, '/rear/usb_camera/image')
+    proc = ros2_launch('two_cameras.launch.py', front_device='synthetic',
+                       rear_device='synthetic')
+    for side, frames in (('front', front), ('rear', rear)):
+        assert parameters(peer, '%s/usbcam_publisher' % side, ['video_device']) == {
+            'video_device': 'synthetic'}
+        wait_until(lambda: len(frames) >= 3, START_S, what='frames on /%s' % side)
+    stops_cleanly(proc, ['usbcam_publisher', 'usbcam_publisher'])
