@@ -17,9 +17,10 @@ Image topics the way image_transport lays them out, in rclpy.
 
 A base topic ``T`` (after remapping) carries ``sensor_msgs/Image``; ``T/compressed`` carries
 the same frames as ``sensor_msgs/CompressedImage`` (JPEG, ``format`` as image_transport's
-compressed plugin writes it for bgr8); ``camera_info`` beside it (``<dir of T>/camera_info``)
-carries their ``CameraInfo``. `ImagePublisher` produces each form only while its topic has
-subscribers, and publishes a camera's own JPEG untouched. `subscribe()` is what an
+compressed plugin writes it for bgr8, or mono8 for a grey picture); ``camera_info`` beside it
+(``<dir of T>/camera_info``) carries their ``CameraInfo``. `ImagePublisher` produces each form
+only while its topic has subscribers, in any encoding the bridge knows, and publishes a
+camera's own JPEG untouched. `subscribe()` is what an
 image_transport subscriber's ``image_transport`` parameter (``raw`` or ``compressed``) chooses.
 """
 
@@ -34,6 +35,7 @@ from sensor_msgs.msg import CompressedImage, Image
 
 TRANSPORTS = ('raw', 'compressed')
 JPEG_FORMAT = 'bgr8; jpeg compressed bgr8'
+MONO_JPEG_FORMAT = 'mono8; jpeg compressed mono8'
 _SOF_MARKERS = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}
 
 
@@ -95,33 +97,39 @@ class ImagePublisher:
         """Return True while the compressed topic has subscribers."""
         return self.compressed.get_subscription_count() > 0
 
-    def publish(self, header, bgr: Callable[[], Optional[np.ndarray]],
-                jpeg: Optional[np.ndarray] = None) -> Tuple[bool, bool]:
+    def publish(self, header, image: Callable[[], Optional[np.ndarray]],
+                jpeg: Optional[np.ndarray] = None, encoding: str = 'bgr8',
+                picture: Optional[Callable[[], Optional[np.ndarray]]] = None
+                ) -> Tuple[bool, bool]:
         """
         Publish one frame with header to the topics that have subscribers.
 
-        bgr() returns the pixels (it may decode); jpeg is the camera's own JPEG, published as
-        it is. Returns (raw published, compressed published).
+        image() returns the pixels in `encoding` (it may convert or decode); jpeg is the
+        camera's own JPEG, published as it is; picture() returns the 8-bit picture (BGR, or one
+        channel for a grey one) a JPEG is encoded from when there is none (image() when not
+        given: `encoding` is bgr8 or mono8 then). Returns (raw published, compressed published).
         """
         raw_done = compressed_done = False
         if self.wants_raw() or not self._lazy_raw:
-            image = bgr()
-            if image is None:
+            pixels = image()
+            if pixels is None:
                 return False, False  # not a whole image (a JPEG that does not decode): no part
-            msg = self._bridge.cv2_to_imgmsg(image, 'bgr8')
+            msg = self._bridge.cv2_to_imgmsg(pixels, encoding)
             msg.header = header
             self.raw.publish(msg)
             raw_done = True
         if self.wants_compressed():
+            what = JPEG_FORMAT
             if jpeg is None:
-                image = bgr()
-                if image is not None:
+                source = (picture or image)()
+                if source is not None:
                     ok, encoded = cv2.imencode(
-                        '.jpg', image, [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
+                        '.jpg', source, [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
                     jpeg = encoded if ok else None
+                    what = MONO_JPEG_FORMAT if source.ndim == 2 else JPEG_FORMAT
                     self.encoded += 1
             if jpeg is not None:
-                msg = CompressedImage(header=header, format=JPEG_FORMAT)
+                msg = CompressedImage(header=header, format=what)
                 fill_message_data(msg, jpeg)
                 self.compressed.publish(msg)
                 compressed_done = True
