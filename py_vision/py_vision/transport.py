@@ -22,8 +22,15 @@ compressed plugin writes it for bgr8, or mono8 for a grey picture); ``camera_inf
 only while its topic has subscribers, in any encoding the bridge knows, and publishes a
 camera's own JPEG untouched. `subscribe()` is what an
 image_transport subscriber's ``image_transport`` parameter (``raw`` or ``compressed``) chooses.
+
+A camera's own H.264 or HEVC goes out untouched, one access unit per message, by
+`VideoPublisher`: as ``foxglove_msgs/CompressedVideo`` on ``T/foxglove`` (the topic of
+image_transport's foxglove plugin) where foxglove_msgs 3.0 or newer is installed, else as
+``sensor_msgs/CompressedImage`` with format ``h264`` (``h265``) on ``T/h264`` (``T/h265``);
+docs/transport.md says why.
 """
 
+from dataclasses import dataclass
 from typing import Callable, Optional, Tuple
 
 import cv2
@@ -33,7 +40,14 @@ from py_vision.params import Parameters
 from py_vision.qos import create_publisher, ImageSubscription
 from sensor_msgs.msg import CompressedImage, Image
 
+try:
+    from foxglove_msgs.msg import CompressedVideo
+except ImportError:  # not installed, or older than 3.0 (Humble's boards have neither)
+    CompressedVideo = None
+
 TRANSPORTS = ('raw', 'compressed')
+# The topics a camera's own video may be on, by their last name (`video_topic`).
+VIDEO_TRANSPORTS = ('foxglove', 'h264', 'h265')
 JPEG_FORMAT = 'bgr8; jpeg compressed bgr8'
 MONO_JPEG_FORMAT = 'mono8; jpeg compressed mono8'
 _SOF_MARKERS = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}
@@ -141,9 +155,88 @@ def subscribe(node, base_topic: str, transport: str, callback,
     """
     Subscribe to base_topic's frames as `transport` says: raw Images or CompressedImages.
 
-    The subscription hears reliable and best-effort publishers alike (qos.ImageSubscription).
+    With a video transport (VIDEO_TRANSPORTS) it reads the camera's own access units:
+    CompressedVideo on ``T/foxglove``, CompressedImage on ``T/h264`` or ``T/h265``; ValueError
+    when foxglove is asked for and foxglove_msgs is not installed. The subscription hears
+    reliable and best-effort publishers alike (qos.ImageSubscription).
     """
+    if transport in VIDEO_TRANSPORTS:
+        topic = node.resolve_topic_name(base_topic) + '/' + transport
+        if transport != 'foxglove':
+            return ImageSubscription(node, CompressedImage, topic, callback, depth=depth)
+        if CompressedVideo is None:
+            raise ValueError(
+                'image_transport foxglove reads foxglove_msgs/CompressedVideo, and '
+                'foxglove_msgs 3.0 or newer is not installed here; a py_vision camera without '
+                'it publishes on %s/h264 (image_transport:=h264)' % node.resolve_topic_name(
+                    base_topic))
+        return ImageSubscription(node, CompressedVideo, topic, callback, depth=depth)
     if transport == 'compressed':
         return ImageSubscription(node, CompressedImage, compressed_topic(node, base_topic),
                                  callback, depth=depth)
     return ImageSubscription(node, Image, base_topic, callback, depth=depth)
+
+
+@dataclass(frozen=True)
+class VideoTopic:
+    """The message a camera's access units go out in, and the topic's last name."""
+
+    msg_type: type
+    transport: str       # 'foxglove', or the codec's format ('h264', 'h265') on the fallback
+
+    @property
+    def fallback(self) -> bool:
+        """Return True when the chosen message (CompressedVideo) is not installed here."""
+        return self.msg_type is CompressedImage
+
+    def message(self, header, data, video_format: str):
+        """Return the message of one access unit (bytes or 1-D uint8) with header's stamp."""
+        if self.fallback:
+            msg = CompressedImage(header=header, format=video_format)
+        else:
+            msg = self.msg_type(timestamp=header.stamp, frame_id=header.frame_id,
+                                format=video_format)
+        fill_message_data(msg, np.frombuffer(data, np.uint8))
+        return msg
+
+
+def video_topic(video_format: str, compressed_video=CompressedVideo) -> VideoTopic:
+    """Return where access units of video_format ('h264', 'h265') go with what is installed."""
+    if compressed_video is None:
+        return VideoTopic(CompressedImage, video_format)
+    return VideoTopic(compressed_video, 'foxglove')
+
+
+def video_fields(msg):
+    """Return (stamp, frame_id, format) of a CompressedVideo or a CompressedImage."""
+    if isinstance(msg, CompressedImage):
+        return msg.header.stamp, msg.header.frame_id, msg.format
+    return msg.timestamp, msg.frame_id, msg.format
+
+
+class VideoPublisher:
+    """A camera's own H.264 or HEVC access units, published untouched while someone listens."""
+
+    def __init__(self, parameters: Parameters, base_topic: str, qos, video_format: str,
+                 compressed_video=CompressedVideo):
+        node = parameters.node
+        self.format = video_format
+        self.topic = video_topic(video_format, compressed_video)
+        self.name = node.resolve_topic_name(base_topic) + '/' + self.topic.transport
+        self.publisher = create_publisher(parameters, self.topic.msg_type, self.name, qos)
+        if self.topic.fallback:
+            node.get_logger().warning(
+                "foxglove_msgs 3.0 or newer (CompressedVideo) is not installed: the camera's "
+                '%s goes out as sensor_msgs/CompressedImage (format %s) on %s; Foxglove and '
+                "image_transport's foxglove plugin read foxglove_msgs/CompressedVideo on "
+                '%s/foxglove (install ros-$ROS_DISTRO-foxglove-msgs)' % (
+                    video_format.upper(), video_format, self.name,
+                    node.resolve_topic_name(base_topic)))
+
+    def wants(self) -> bool:
+        """Return True while the video topic has subscribers."""
+        return self.publisher.get_subscription_count() > 0
+
+    def publish(self, header, data) -> None:
+        """Publish one access unit (the camera's bytes) with the frame's header."""
+        self.publisher.publish(self.topic.message(header, data, self.format))

@@ -19,23 +19,29 @@ The ROS 2 port of the tutorial's subscriber. It hears reliable and best-effort p
 shows any encoding the bridge knows (in an OpenCV window or a browser), logs the received
 rate and latency, and survives malformed images with a rate-limited error. With
 ``image_transport:=compressed`` it reads usb_camera/image/compressed instead, and the browser
-viewer forwards the JPEG bytes it receives without decoding them.
+viewer forwards the JPEG bytes it receives without decoding them. With ``foxglove`` (or
+``h264``, ``h265``) it reads a camera's own video (transport.VideoPublisher): the browser
+viewer's page decodes it itself, and it is decoded here only for a window (viewer.display).
 """
 
 import cv2
 import numpy as np
 from py_vision import dds
+from py_vision.annexb import inspect
 from py_vision.cv_bridge import CvBridge, CvBridgeError, cvtColorForDisplay
 from py_vision.diagnostics import Diagnostics, OK, Recent, Status, WARN
 from py_vision.node_main import main_for
-from py_vision.params import Parameters, Spec, viewer_specs
+from py_vision.params import ConfigError, Parameters, Spec, viewer_specs
 from py_vision.stats import stamp_age_s, StreamStats
-from py_vision.transport import jpeg_size, subscribe, TRANSPORTS
+from py_vision.transport import (
+    jpeg_size, subscribe, TRANSPORTS, video_fields, VIDEO_TRANSPORTS)
 from py_vision.viewer.display import Display, DISPLAYS
 from rclpy.node import Node
 
 DEPTH_ENCODINGS = ('16UC1', '16SC1')
 IMAGE_TOPIC = 'usb_camera/image'
+# A video message's format -> the codec it holds (CompressedVideo says h265, V4L2 HEVC).
+VIDEO_CODECS = {'h264': 'h264', 'h265': 'hevc', 'hevc': 'hevc'}
 
 
 class VideoSubscriber(Node):
@@ -50,7 +56,10 @@ class VideoSubscriber(Node):
         Spec('stats_period', 5.0, 'seconds between statistics log lines', (0.0, 3600.0),
              check=lambda v: v > 0, accepted='a number > 0 and <= 3600', live=True),
         Spec('image_transport', 'raw', 'raw: sensor_msgs/Image on the topic; compressed: '
-             'sensor_msgs/CompressedImage on <topic>/compressed', choices=TRANSPORTS),
+             "sensor_msgs/CompressedImage on <topic>/compressed; foxglove: a camera's "
+             'H.264 as foxglove_msgs/CompressedVideo on <topic>/foxglove; h264, h265: as '
+             'sensor_msgs/CompressedImage on <topic>/h264 or /h265',
+             choices=TRANSPORTS + VIDEO_TRANSPORTS),
     )
 
     display = None  # what close() finds when start-up was interrupted before it was made
@@ -67,11 +76,16 @@ class VideoSubscriber(Node):
         self.stats = StreamStats(window_s=self.stats_period)
         self._errors_reported = 0
         self._last_error = ''
-        compressed = values['image_transport'] == 'compressed'
+        transport = values['image_transport']
+        self._video_size = (0, 0)     # of the newest SPS seen
         self.display = Display(self.get_logger(), values['display'], values['web_host'],
                                values['web_port'], IMAGE_TOPIC, values['web_token'])
-        self.subscription_ = subscribe(self, IMAGE_TOPIC, values['image_transport'],
-                                       self.on_compressed if compressed else self.callback)
+        callback = {'compressed': self.on_compressed, 'raw': self.callback}.get(
+            transport, self.on_video)
+        try:
+            self.subscription_ = subscribe(self, IMAGE_TOPIC, transport, callback)
+        except ValueError as error:
+            raise ConfigError(str(error))
         self._stats_timer = self.create_timer(self.stats_period, self.report_stats)
         self.display.attach(self, self.stats, self.subscription_.topic_name,
                             camera_topic=self.subscription_.topic_name)
@@ -127,6 +141,24 @@ class VideoSubscriber(Node):
             else:
                 self.display.show(image)  # a PNG: the viewer encodes it
         self.stats.add(latency, size[0], size[1], msg.format.split(';')[0] or 'jpeg')
+
+    def on_video(self, msg):
+        """Show one access unit of a camera's H.264 or HEVC (CompressedVideo, CompressedImage)."""
+        stamp, _, video_format = video_fields(msg)
+        latency = stamp_age_s(self.get_clock().now().nanoseconds, stamp)
+        codec = VIDEO_CODECS.get(video_format)
+        unit = bytes(msg.data)
+        info = inspect(unit, codec) if codec is not None else None
+        if info is None or not info.nal_types:
+            self._bad_message(0, 0, 'video message (format "%s", %d bytes)' % (
+                video_format, len(unit)), 'it is not H.264 or HEVC in Annex B form' if
+                codec is None else 'it holds no NAL unit')
+            return
+        if info.width:
+            self._video_size = (info.width, info.height)
+        self.stats.add(latency, self._video_size[0], self._video_size[1], video_format)
+        if self.display.active:
+            self.display.show_video(unit, info, codec)
 
     def _bad_message(self, width, height, what, error):
         self.stats.add_error()

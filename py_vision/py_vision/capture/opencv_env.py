@@ -31,6 +31,8 @@ __all__ = ['prepare_opencv']
 def prepare_opencv() -> None:
     """Silence OpenCV's log (idempotent)."""
     os.environ.setdefault('OPENCV_LOG_LEVEL', 'SILENT')
+    # FFmpeg's own messages (a stream it decodes ending mid-picture) too: AV_LOG_QUIET.
+    os.environ.setdefault('OPENCV_FFMPEG_LOGLEVEL', '-8')
     # OpenCV 4.5+ and 5.x: cv2.utils.logging; some 4.x builds only have cv2.setLogLevel.
     logging = getattr(getattr(cv2, 'utils', None), 'logging', None)
     set_level = getattr(logging, 'setLogLevel', None) or getattr(cv2, 'setLogLevel', None)

@@ -17,15 +17,23 @@ Where a node shows frames: an OpenCV window, the browser viewer, or nowhere.
 
 `auto` takes a window where this machine can open one (a screen and an OpenCV with GUI
 support) and the browser viewer otherwise, which is what a board without a screen needs.
+
+A camera's H.264 (`show_video`) goes to the browser as it is, for the page to decode itself;
+it is decoded here (`video_decoder`) only while someone needs pixels: a window, or a browser
+that cannot decode it (MJPEG clients, snapshots). Where this machine cannot decode, it says so
+once.
 """
 
 import os
 import socket
 import sys
+import threading
 
 import cv2
 import numpy as np
+from py_vision.annexb import UnitInfo
 from py_vision.params import ConfigError
+from py_vision.video_decoder import VideoDecoder
 
 DISPLAYS = ('auto', 'window', 'web', 'none')
 WEB_STATS_PERIOD_S = 1.0
@@ -72,6 +80,12 @@ class Display:
     def __init__(self, logger, mode, web_host, web_port, title, web_token=''):
         self.window_title = None
         self.viewer = None
+        self._logger = logger
+        self._decoder = None           # decoding a camera's video while pixels are needed
+        self._cannot_decode = None     # why it cannot, once said
+        self._decoded = None           # the newest decoded picture, not shown yet
+        self._decoded_lock = threading.Lock()
+        self._wake = None              # runs _show_decoded on the node's executor
         if mode in ('auto', 'window'):
             reason = window_unavailable_reason()
             if reason is None:
@@ -95,7 +109,6 @@ class Display:
             except WebViewerError as error:
                 raise ConfigError(str(error))
             self.viewer = viewer
-            self._logger = logger
 
     def attach(self, node, stats, topic, camera_topic=None):
         """
@@ -116,6 +129,8 @@ class Display:
         if self.window_title is not None:
             # The window repaints and answers its close button also when no frame arrives.
             node.create_timer(WINDOW_EVENTS_PERIOD_S, lambda: cv2.waitKey(1))
+        # Pictures decoded on the decoder's thread are shown on the executor's, as all others.
+        self._wake = node.create_guard_condition(self._show_decoded)
 
     @property
     def active(self):
@@ -143,6 +158,60 @@ class Display:
         if self.viewer is not None:
             self.viewer.submit_jpeg(np.asarray(jpeg, np.uint8).tobytes())
 
+    def show_video(self, unit: bytes, info: UnitInfo, codec: str) -> None:
+        """
+        Show one access unit of a camera's video (codec 'h264' or 'hevc').
+
+        The browser viewer gets H.264 as it is; the unit is decoded here only while pixels
+        are needed (a window, MJPEG clients or a snapshot of the viewer).
+        """
+        viewer = self.viewer
+        if viewer is not None and codec == 'h264':
+            viewer.submit_video(unit, info.decodable_start, info.codec_string)
+        wanted = self.window_title is not None or (viewer is not None and viewer.wants_pixels)
+        if self._decoder is not None and (not wanted or self._decoder.codec != codec):
+            self._decoder.close(timeout=0)
+            self._decoder = None
+        if not wanted:
+            return
+        if self._decoder is None:
+            if self._cannot_decode is not None:
+                return
+            self._decoder = VideoDecoder(codec, self._decoded_picture, self._decoder_failed)
+            if self._decoder.failed:
+                self._decoder_failed(self._decoder.failed)
+                return
+            if viewer is not None and codec == 'h264':
+                # From the newest keyframe the viewer keeps: a picture at once.
+                for kept, _ in viewer.video.since(0, 0)[1][:-1]:
+                    self._decoder.decode(kept)
+        self._decoder.decode(unit)
+
+    def _decoder_failed(self, reason):
+        if self._cannot_decode is None:
+            self._cannot_decode = reason
+            if self.viewer is not None:
+                self.viewer.video_decoder_missing = reason
+            self._logger.error(
+                "cannot decode the camera's video here, so %s shows none of it: %s%s" % (
+                    'the window' if self.window_title is not None else
+                    'a browser without WebCodecs', reason,
+                    '' if self.window_title is not None else
+                    ' (Chromium and Edge decode H.264 themselves on a secure page: the viewer '
+                    'on localhost, or through ssh -L)'))
+
+    def _decoded_picture(self, picture, tag):
+        with self._decoded_lock:
+            self._decoded = picture
+        if self._wake is not None:
+            self._wake.trigger()
+
+    def _show_decoded(self):
+        with self._decoded_lock:
+            picture, self._decoded = self._decoded, None
+        if picture is not None:
+            self.show(picture)
+
     def close(self):
         """Close the window, or stop the viewer and release its port."""
         if self.window_title is not None:
@@ -150,5 +219,7 @@ class Display:
                 cv2.destroyWindow(self.window_title)
             except cv2.error:
                 pass
+        if self._decoder is not None:
+            self._decoder.close()
         if self.viewer is not None:
             self.viewer.close()

@@ -17,11 +17,12 @@
 The browser viewer's HTTP server: live images over HTTP, with the standard library only.
 
 It serves the addresses in `ROUTES` and nothing else: the page (its three files, read once
-from ``page/``), the MJPEG stream, a snapshot, the statistics as JSON, and the camera panel's
-API, which a `CameraAccess` given to ``set_camera()`` answers (no ROS here). Who may ask what
-is `access`'s. Every client has its own thread and always gets the newest frame (`frames`), so
-a slow client skips frames instead of slowing the producer or the other clients. The number of
-video clients and of connections is bounded; further ones get a short 503 answer.
+from ``page/``), the MJPEG stream, a snapshot, a camera's H.264 for the page to decode itself
+(`video`), the statistics as JSON, and the camera panel's API, which a `CameraAccess` given
+to ``set_camera()`` answers (no ROS here). Who may ask what is `access`'s. Every client has
+its own thread and always gets the newest frame (`frames`), so a slow client skips frames
+instead of slowing the producer or the other clients. The number of video clients and of
+connections is bounded; further ones get a short 503 answer.
 """
 
 from dataclasses import dataclass
@@ -44,6 +45,7 @@ import numpy as np
 from py_vision.viewer.access import Access, Refusal
 from py_vision.viewer.camera_access import CameraAccess, CameraError
 from py_vision.viewer.frames import FrameStore
+from py_vision.viewer.video import frame, VideoStore
 
 _BOUNDARY = 'py_vision_frame'
 # A client that accepts no data for this long (it vanished or stalled) is dropped.
@@ -59,6 +61,8 @@ _EXTRA_CONNECTIONS = 16
 _WILDCARD_HOSTS = ('', '0.0.0.0', '::')
 # The largest request body taken (a POST of controls is a few hundred bytes).
 MAX_BODY = 16384
+# A snapshot asked for keeps a video stream decoded here this long (the next one is ready).
+_SNAPSHOT_INTEREST = 10.0
 # What the page may load and from where: its own files, nothing inline, nothing elsewhere.
 _POLICY = ("default-src 'none'; img-src 'self'; connect-src 'self'; style-src 'self'; "
            "script-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'")
@@ -291,6 +295,7 @@ class _Handler(BaseHTTPRequestHandler):
         self._send(200, 'application/json', body)
 
     def serve_snapshot(self, route):
+        self.server.viewer.snapshot_asked = time.monotonic()
         jpeg = self.server.viewer.frames.latest_jpeg()[1]
         if jpeg is None:
             self._send(503, 'text/plain; charset=utf-8', b'No frame received yet.\n',
@@ -332,6 +337,7 @@ class _Handler(BaseHTTPRequestHandler):
                        b'Too many viewers are connected; close one and reload.\n',
                        [('Retry-After', '5')])
             return
+        viewer.pixel_clients(+1)
         try:
             self.close_connection = True
             self._headers(200, 'multipart/x-mixed-replace; boundary=' + _BOUNDARY,
@@ -356,6 +362,41 @@ class _Handler(BaseHTTPRequestHandler):
                                  b'\r\n--%s\r\n' % (len(jpeg), jpeg, _BOUNDARY.encode()))
         except (OSError, ValueError):
             pass  # the client went away (reset, broken pipe, timeout) or the viewer closed
+        finally:
+            viewer.pixel_clients(-1)
+            connections.release_stream()
+
+    def serve_video(self, route):
+        viewer = self.server.viewer
+        connections = viewer.connections
+        if not viewer.video.number:
+            self._fail(404, 'this viewer shows no H.264 stream')
+            return
+        if not connections.take_stream():
+            self._fail(503, 'too many viewers are connected; close one and reload',
+                       [('Retry-After', '5')])
+            return
+        try:
+            self.close_connection = True
+            # The body is the units, framed (video.frame), until the connection closes.
+            self._headers(200, 'application/octet-stream',
+                          [('X-Video-Codec', viewer.video.codec)])
+            self.end_headers()
+            if self.command == 'HEAD':
+                return
+            sent = 0
+            while True:
+                got = viewer.video.since(sent, _IDLE_CHECK)
+                if got is None:
+                    return  # the viewer is closing
+                newest, units = got
+                if not units and newest == sent and self._client_gone():
+                    return
+                sent = newest
+                for unit, start in units:
+                    self.wfile.write(frame(unit, start))
+        except (OSError, ValueError):
+            pass  # the client went away, or the viewer closed
         finally:
             connections.release_stream()
 
@@ -460,6 +501,9 @@ ROUTES: Dict[str, Route] = {
     '/viewer.css': Route(_READ, _Handler.serve_page, "the page's style"),
     '/stream': Route(_READ, _Handler.serve_stream,
                      'MJPEG (multipart/x-mixed-replace), always the newest frame'),
+    '/video': Route(_READ, _Handler.serve_video,
+                    "a camera's H.264 access units for the page to decode (WebCodecs), from "
+                    'the newest keyframe on (404 without one)'),
     '/snapshot.jpg': Route(_READ, _Handler.serve_snapshot,
                            'the newest frame as one JPEG (503 until the first frame)'),
     '/stats': Route(_READ, _Handler.serve_stats,
@@ -487,6 +531,10 @@ class WebViewer:
         self._requested_port = int(port)
         self.connections = Connections(max_clients)
         self.frames = FrameStore(jpeg_quality)
+        self.video = VideoStore()
+        self.snapshot_asked = -math.inf     # time.monotonic() of the last /snapshot.jpg
+        self._pixel_clients = 0
+        self.video_decoder_missing = None          # why H.264 is not decoded here (None: it is)
         self.access = Access(host, token)
         self.log = ThrottledLog(logger if logger is not None else logging.getLogger(__name__))
         self.page = page_files(title)
@@ -586,6 +634,31 @@ class WebViewer:
         """Make an already encoded JPEG (bytes) the newest frame; it is served as it is."""
         self.frames.submit_jpeg(jpeg)
 
+    def submit_video(self, unit: bytes, start: bool, codec: str = ''):
+        """
+        Add a camera's H.264 access unit for the page's own decoder (GET /video).
+
+        start: a decoder can start at it (a keyframe with its SPS and PPS); codec: the codec
+        string of its SPS ('avc1.42c01e') when it has one.
+        """
+        self.video.submit(unit, start, codec)
+
+    def pixel_clients(self, change: int) -> None:
+        """Count an MJPEG client in (+1) or out (-1)."""
+        with self._stats_lock:
+            self._pixel_clients += change
+
+    @property
+    def wants_pixels(self) -> bool:
+        """
+        Return True when someone needs decoded frames: an MJPEG client, a recent snapshot.
+
+        A page that decodes H.264 itself needs none.
+        """
+        with self._stats_lock:
+            clients = self._pixel_clients
+        return clients > 0 or time.monotonic() - self.snapshot_asked < _SNAPSHOT_INTEREST
+
     def set_stats(self, stats):
         """Set the JSON-able dict /stats and the page show (fps, latency, size, topic...)."""
         with self._stats_lock:
@@ -597,7 +670,10 @@ class WebViewer:
             result = dict(self._stats)
         result['clients'] = self.connections.streams
         result['encoded_frames'] = self.frames.encoded
-        result['viewer_frames'] = self.frames.number
+        result['viewer_frames'] = self.frames.number + self.video.number
+        if self.video.number:
+            result['video_codec'] = self.video.codec
+            result['video_decoder_missing'] = self.video_decoder_missing
         return _json_safe(result)
 
     @property
@@ -613,6 +689,7 @@ class WebViewer:
     def close(self):
         """Stop serving, drop every client and release the port; safe to call twice."""
         self.frames.close()
+        self.video.close()
         server, self._server = self._server, None
         if server is None:
             return

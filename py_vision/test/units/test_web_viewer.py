@@ -206,7 +206,11 @@ def test_page_is_self_contained_with_the_video_and_stats_elements(make_viewer):
     assert status == 200
     assert headers['content-type'] == 'text/html; charset=utf-8'
     page = body.decode()
-    assert re.search(r'<img id="video" src="/stream"', page)
+    # The script chooses what the video shows (MJPEG in the img, or H.264 the page decodes
+    # itself on the canvas) once it knows what the node receives.
+    assert re.search(r'<img id="video" alt=', page) and '<canvas id="canvas"' in page
+    script = request(viewer, '/viewer.js')[2].decode()
+    assert '"/stream?t="' in script and 'fetch("/video"' in script
     for element in ('stat-fps', 'stat-latency', 'stat-resolution', 'stat-encoding',
                     'stat-topic', 'stat-clients'):
         assert 'id="%s"' % element in page

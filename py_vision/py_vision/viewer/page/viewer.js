@@ -1,4 +1,6 @@
 "use strict";
+/* WebCodecs, newer than the browser globals of the ESLint that lints this page. */
+/* global VideoDecoder, EncodedVideoChunk */
 (function () {
   const video = document.getElementById("video");
   const overlay = document.getElementById("overlay");
@@ -11,19 +13,115 @@
   }
   function setStatus(text, cls) { status.textContent = text; status.className = cls; }
 
+  const canvas = document.getElementById("canvas");
+  // "mjpeg" (the img shows /stream) or "h264" (this page decodes /video itself, WebCodecs),
+  // chosen from /stats: at the first answer (null until then, so nothing is fetched twice),
+  // and again when the codec the node receives changes (chosenFor).
+  let mode = null;
+  let chosenFor = null;
+  let player = null;   // the H.264 player while one runs: {stop}
+
   function connectVideo() {
     retry = null;
-    video.src = "/stream?t=" + Date.now();
+    if (mode === "h264") {
+      player = playH264();
+    } else if (mode === "mjpeg") {
+      video.src = "/stream?t=" + Date.now();
+    }
+  }
+  function disconnectVideo() {
+    video.removeAttribute("src");
+    if (player) { player.stop(); player = null; }
   }
   function message(text) { overlay.textContent = text; overlay.hidden = !text; }
-  video.addEventListener("error", function () {
+  function videoLost() {
     message("video unavailable (too many viewers, or the node stopped); retrying");
     if (!retry && !document.hidden) { retry = setTimeout(connectVideo, 3000); }
-  });
+  }
+  video.addEventListener("error", videoLost);
   // A hidden tab stops its stream, so background tabs cost the robot nothing.
   document.addEventListener("visibilitychange", function () {
-    if (document.hidden) { video.removeAttribute("src"); } else { connectVideo(); }
+    if (document.hidden) { disconnectVideo(); } else { connectVideo(); }
   });
+
+  // A camera's H.264, decoded here: where the browser has WebCodecs for it (a secure context:
+  // this machine's viewer, or one reached through ssh -L), the node decodes nothing.
+  async function canDecode(codec) {
+    if (typeof VideoDecoder !== "function" || !codec) { return false; }
+    try {
+      return (await VideoDecoder.isConfigSupported({ codec: codec })).supported === true;
+    } catch (e) {
+      return false;
+    }
+  }
+
+  async function chooseMode(s) {
+    chosenFor = s.video_codec || "";
+    disconnectVideo();
+    const h264 = Boolean(s.video_codec) && await canDecode(s.video_codec);
+    mode = h264 ? "h264" : "mjpeg";
+    video.hidden = h264;
+    canvas.hidden = !h264;
+    if (!document.hidden) { connectVideo(); }
+  }
+
+  // GET /video: each access unit after a 5-byte header (length, big-endian; 1 where a
+  // decoder can start). Units after a gap (too slow to keep up) wait for such a start.
+  function playH264() {
+    const abort = new AbortController();
+    let stopped = false;
+    const decoder = new VideoDecoder({
+      output: function (picture) {
+        if (canvas.width !== picture.displayWidth) { canvas.width = picture.displayWidth; }
+        if (canvas.height !== picture.displayHeight) {
+          canvas.height = picture.displayHeight;
+        }
+        canvas.getContext("2d").drawImage(picture, 0, 0);
+        picture.close();
+      },
+      error: function () { if (!stopped) { abort.abort(); } },
+    });
+    (async function () {
+      try {
+        const response = await fetch("/video", { cache: "no-store", signal: abort.signal });
+        if (!response.ok) { throw new Error(String(response.status)); }
+        decoder.configure({ codec: response.headers.get("X-Video-Codec"),
+                            optimizeForLatency: true });
+        const reader = response.body.getReader();
+        let buffer = new Uint8Array(0);
+        let count = 0;
+        let waiting = true;
+        for (;;) {
+          const chunk = await reader.read();
+          if (chunk.done) { throw new Error("the stream ended"); }
+          const joined = new Uint8Array(buffer.length + chunk.value.length);
+          joined.set(buffer);
+          joined.set(chunk.value, buffer.length);
+          buffer = joined;
+          while (buffer.length >= 5) {
+            const length = new DataView(buffer.buffer, buffer.byteOffset).getUint32(0);
+            if (buffer.length < 5 + length) { break; }
+            const start = buffer[4] === 1;
+            // A decoder that cannot keep up skips to the next start, as the node's does.
+            if (decoder.decodeQueueSize > 30) { waiting = true; }
+            if (start) { waiting = false; }
+            if (!waiting) {
+              decoder.decode(new EncodedVideoChunk({
+                type: start ? "key" : "delta", timestamp: 1000 * count,
+                data: buffer.subarray(5, 5 + length) }));
+              count += 1;
+            }
+            buffer = buffer.slice(5 + length);
+          }
+        }
+      } catch (e) {
+        if (!stopped) { player = null; videoLost(); }
+      } finally {
+        if (decoder.state !== "closed") { decoder.close(); }
+      }
+    })();
+    return { stop: function () { stopped = true; abort.abort(); } };
+  }
 
   // One request at a time, one per second: the page never floods the server.
   async function poll() {
@@ -51,7 +149,13 @@
         show("stat-age", num(s.age_ms_p50, 1, " ms"));
         show("stat-age-p99", num(s.age_ms_p99, 1, " ms"));
       }
-      if (s.viewer_frames > 0) {
+      if (chosenFor !== (s.video_codec || "")) { chooseMode(s); }
+      if (s.viewer_frames > 0 && mode === "mjpeg" && s.video_codec && s.video_decoder_missing) {
+        setStatus("live", "live");
+        message("this browser cannot decode the camera\u2019s H.264 here (it needs WebCodecs " +
+                "in a secure context: open the viewer on localhost, e.g. through ssh -L), " +
+                "and the node cannot either: " + s.video_decoder_missing);
+      } else if (s.viewer_frames > 0) {
         setStatus("live", "live");
         if (!retry) { message(""); }
       } else {
@@ -267,12 +371,21 @@
   }
   pollCamera();
 
-  document.getElementById("snapshot").addEventListener("click", function () {
+  function download(href) {
     const link = document.createElement("a");
-    link.href = "/snapshot.jpg";
+    link.href = href;
     link.download = "snapshot-" + new Date().toISOString().replace(/[:.]/g, "-") + ".jpg";
     document.body.appendChild(link);
     link.click();
     link.remove();
+  }
+  document.getElementById("snapshot").addEventListener("click", function () {
+    if (mode !== "h264") { download("/snapshot.jpg"); return; }
+    // The picture this page decoded: the node has none to give.
+    canvas.toBlob(function (blob) {
+      const href = URL.createObjectURL(blob);
+      download(href);
+      setTimeout(function () { URL.revokeObjectURL(href); }, 1000);
+    }, "image/jpeg", 0.9);
   });
 })();
