@@ -474,6 +474,21 @@ def fill_message_data(msg, cvim):
     data.frombytes(cvim.reshape(-1).view(np.uint8))
 
 
+def share_message_data(msg, cvim):
+    """
+    Make msg.data (Image, CompressedImage) the bytes of array cvim themselves: no copy.
+
+    For a message published at once: rclpy copies the bytes into the middleware's message
+    when it publishes, from cvim's own memory (a camera's buffer, say), so the frame is copied
+    once instead of twice. cvim must stay unchanged until then. The message's field is set
+    as the generated message code reads it (any object with the buffer protocol), not through
+    its setter, which would copy it element by element.
+    """
+    if not cvim.flags.c_contiguous:
+        cvim = np.ascontiguousarray(cvim)
+    msg._data = cvim.reshape(-1).view(np.uint8)
+
+
 # --- compressed images ----------------------------------------------------------------
 
 _DECODED_ENCODINGS = {(1, 8): 'mono8', (1, 16): 'mono16', (3, 8): 'bgr8', (3, 16): 'bgr16',
@@ -582,13 +597,15 @@ class CvBridge:
             return im
         return _convert(im, enc, _encoding(desired_encoding))
 
-    def cv2_to_imgmsg(self, cvim, encoding='passthrough', header=None):
+    def cv2_to_imgmsg(self, cvim, encoding='passthrough', header=None, share=False):
         """
         Convert a numpy image to a sensor_msgs/Image holding a copy of its pixels.
 
         With 'passthrough' the encoding is the array's OpenCV type ('8UC3', '16UC1', ...);
         otherwise ``encoding`` must have the array's type and channel count. ``header`` (a
-        std_msgs/Header) is copied into the message.
+        std_msgs/Header) is copied into the message. With ``share`` (not upstream's) the
+        message holds cvim's own bytes instead of a copy (`share_message_data`): for a message
+        published at once, while cvim is unchanged.
         """
         array_enc = _array_encoding(cvim)
         if encoding == 'passthrough':
@@ -618,7 +635,7 @@ class CvBridge:
         img_msg.is_bigendian = cvim.dtype.itemsize > 1 and (
             byteorder == '>' or (byteorder == '=' and _NATIVE_BIG))
         img_msg.step = img_msg.width * array_enc.pixel_bytes
-        fill_message_data(img_msg, cvim)
+        (share_message_data if share else fill_message_data)(img_msg, cvim)
         return img_msg
 
     def compressed_imgmsg_to_cv2(self, cmprs_img_msg, desired_encoding='passthrough'):

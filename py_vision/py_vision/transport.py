@@ -35,7 +35,7 @@ from typing import Callable, Optional, Tuple
 
 import cv2
 import numpy as np
-from py_vision.cv_bridge import fill_message_data
+from py_vision.cv_bridge import fill_message_data, share_message_data
 from py_vision.params import Parameters
 from py_vision.qos import create_publisher, ImageSubscription
 from sensor_msgs.msg import CompressedImage, Image
@@ -102,6 +102,24 @@ class ImagePublisher:
             parameters, CompressedImage, compressed_topic(node, base_topic), qos)
         self.jpeg_quality = 80
         self.encoded = 0        # JPEG encodes made here (not the camera's own)
+        # The last raw message and its layout: frame after frame of one layout, only its
+        # header and data change (the bridge checked the layout once).
+        self._raw_msg, self._raw_layout = None, None
+
+    def _raw_message(self, pixels: np.ndarray, encoding: str) -> Image:
+        """
+        Return an Image of pixels holding their bytes themselves, not a copy.
+
+        It is published at once: rclpy copies the bytes (a camera's own buffer, with native)
+        into the middleware's message then.
+        """
+        layout = (pixels.shape, pixels.dtype.str, encoding)
+        if layout != self._raw_layout:
+            self._raw_msg = self._bridge.cv2_to_imgmsg(pixels, encoding, share=True)
+            self._raw_layout = layout
+        else:
+            share_message_data(self._raw_msg, pixels)
+        return self._raw_msg
 
     def wants_raw(self) -> bool:
         """Return True while the raw topic has subscribers."""
@@ -128,7 +146,7 @@ class ImagePublisher:
             pixels = image()
             if pixels is None:
                 return False, False  # not a whole image (a JPEG that does not decode): no part
-            msg = self._bridge.cv2_to_imgmsg(pixels, encoding)
+            msg = self._raw_message(pixels, encoding)
             msg.header = header
             self.raw.publish(msg)
             raw_done = True
@@ -144,7 +162,7 @@ class ImagePublisher:
                     self.encoded += 1
             if jpeg is not None:
                 msg = CompressedImage(header=header, format=what)
-                fill_message_data(msg, jpeg)
+                share_message_data(msg, jpeg)
                 self.compressed.publish(msg)
                 compressed_done = True
         return raw_done, compressed_done

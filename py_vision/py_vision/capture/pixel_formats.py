@@ -35,7 +35,8 @@ import cv2
 import numpy as np
 
 __all__ = ['COLOUR_OUTPUTS', 'find', 'FORMATS', 'fourcc_code', 'fourcc_text', 'JPEG_FORMATS',
-           'names_accepted', 'nv24_as_yuyv', 'OPENCV_BGR', 'OUTPUTS', 'PixelFormat', 'Plane', 'UVC_WEBCAM']
+           'names_accepted', 'nv24_as_yuyv', 'OPENCV_BGR', 'OUTPUTS', 'PixelFormat', 'Plane',
+           'UVC_WEBCAM']
 
 # What a frame converts to; 'native' is the camera's own pixels.
 OUTPUTS = ('bgr8', 'rgb8', 'mono8', 'mono16', 'native')

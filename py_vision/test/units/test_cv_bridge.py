@@ -442,6 +442,20 @@ def test_semi_planar_yuv_a_camera_sends(encoding):
         BRIDGE.imgmsg_to_cv2(short)
 
 
+def test_a_shared_message_holds_the_arrays_own_bytes_and_serializes():
+    # What ImagePublisher publishes: no copy of a frame until rclpy's own, at publish.
+    from rclpy.serialization import deserialize_message, serialize_message
+    image = random_image('bgr8', 6, 8)
+    msg = BRIDGE.cv2_to_imgmsg(image, 'bgr8', share=True)
+    image[0, 0, 0] = 7
+    assert bytes(msg.data)[0] == 7 and (msg.height, msg.width, msg.step) == (6, 8, 24)
+    back = deserialize_message(serialize_message(msg), Image)
+    assert np.array_equal(BRIDGE.imgmsg_to_cv2(back), image)
+    copied = BRIDGE.cv2_to_imgmsg(image, 'bgr8')
+    image[0, 0, 0] = 9
+    assert bytes(copied.data)[0] == 7
+
+
 # --- bad input ------------------------------------------------------------------------------
 
 
