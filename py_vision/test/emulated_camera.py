@@ -330,9 +330,14 @@ class EmulatedCamera:
         serial = faults.get('serial', m.get('serial', 'EMU0000'))
         port = faults.get('usb_port', m.get('usb_port', '1'))
         product = m['product']
-        self.by_id = '/dev/v4l/by-id/usb-%s_%s_%s-video-index0' % (
-            m['vendor'].replace(' ', '_'), product.replace(' ', '_'), serial)
-        self.by_path = '/dev/v4l/by-path/pci-0000:00:14.0-usb-0:%s:1.0-video-index0' % port
+        self.driver = m.get('driver', 'uvcvideo')
+        self.bus_info = m.get('bus_info', 'usb-0000:00:14.0-%s' % port)
+        # A device on no USB bus (a board's capture pipeline) gets no by-id link from udev.
+        self.by_id = None if 'bus_info' in m else \
+            '/dev/v4l/by-id/usb-%s_%s_%s-video-index0' % (
+                m['vendor'].replace(' ', '_'), product.replace(' ', '_'), serial)
+        self.by_path = m.get('by_path', '/dev/v4l/by-path/pci-0000:00:14.0-usb-0:%s:1.0-'
+                                        'video-index0' % port)
         self.card = product
         corrupt = dict(m.get('corrupt_jpeg') or {})
         if 'corrupt_every' in faults:
@@ -344,8 +349,9 @@ class EmulatedCamera:
 
     def _write_config(self, serial, port, corrupt, faults):
         m = self.model
-        lines = ['card %s' % self.card, 'bus_info usb-0000:00:14.0-%s' % port,
-                 'by_id %s' % self.by_id, 'by_path %s' % self.by_path,
+        lines = ['card %s' % self.card, 'driver %s' % self.driver,
+                 'bus_info %s' % self.bus_info, 'by_id %s' % (self.by_id or ''),
+                 'by_path %s' % self.by_path,
                  'jpeg_tables %s' % jpeg_tables(),
                  'corrupt_every %d' % int(corrupt.get('every', 0)),
                  'corrupt_mode %s' % corrupt.get('mode', 'truncate'),

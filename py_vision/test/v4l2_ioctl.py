@@ -78,12 +78,16 @@ BUF_FLAG_TIMESTAMP_MONOTONIC = 0x2000
 
 def fourcc(code):
     """Return the V4L2 pixel format number of a four-character code."""
-    return struct.unpack('<I', code.encode('ascii'))[0]
+    return struct.unpack('<I', code.encode('latin-1'))[0]
 
 
 def fourcc_text(number):
-    """Return the four-character code of a V4L2 pixel format number."""
-    return struct.pack('<I', number).decode('ascii')
+    r"""
+    Return the four-character code of a V4L2 pixel format number.
+
+    Decoded as latin-1: a big-endian variant has bit 31 set ('Y16 ' | 1 << 31 is 'Y16\xa0').
+    """
+    return struct.pack('<I', number).decode('latin-1')
 
 
 def _text(raw):

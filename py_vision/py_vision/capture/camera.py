@@ -156,6 +156,8 @@ class Camera:
         self.stream = stream
         self.pixel_format: PixelFormat = stream.pixel_format
         self.file = isinstance(source, VideoFileSource)
+        # The device node a V4L2 camera was found at (video_device:=auto, a by-id link).
+        self.node = source.device.path if isinstance(source, V4L2Source) else None
         self.notes = notes                 # requests the camera did not grant, in words
         self.requested = requested         # width, height and rate asked for
         self.width, self.height, self.fps = stream.width, stream.height, stream.fps

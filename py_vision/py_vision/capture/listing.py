@@ -14,12 +14,13 @@
 
 
 """
-What a device offers, as text: `usbcam_publisher --list-formats`.
+What a device offers, as text: `usbcam_publisher --list-formats` (and `--list-devices`).
 
 Asks the device itself (V4L2 ioctls, or the synthetic camera's model, or the file's own size),
 without streaming and without ROS: each pixel format with its frame sizes and rates and what
 py_vision makes of it (its sensor_msgs encoding as sent, from the pixel format table), then the
-controls with their ranges, menus and values.
+controls with their ranges, menus and values. `devices_listing` is every /dev/videoN in one line
+each (devices.video_devices).
 """
 
 from typing import List
@@ -27,14 +28,14 @@ from typing import List
 import cv2
 from py_vision.capture.camera import open_source
 from py_vision.capture.controls import ControlInfo
-from py_vision.capture.devices import classify, FILE, SYNTHETIC
+from py_vision.capture.devices import classify, FILE, SYNTHETIC, UVC_DRIVER, video_devices
 from py_vision.capture.pixel_formats import find
 from py_vision.capture.source import FrameFormat, SourceError
 from py_vision.capture.synthetic_device import SyntheticDevices
 from py_vision.capture.v4l2 import V4L2Device, V4L2Error
 from py_vision.control_names import param_name
 
-__all__ = ['device_listing']
+__all__ = ['device_listing', 'devices_listing']
 
 
 def _rates(rates) -> str:
@@ -105,4 +106,30 @@ def device_listing(video_device: str) -> str:
     except V4L2Error as error:
         raise SourceError('cannot open video_device "%s": %s' % (device, error.reason)) \
             from None
+    return '\n'.join(lines) + '\n'
+
+
+def devices_listing() -> str:
+    """Return every video device, one line each: what it is, its links, its formats."""
+    found = video_devices()
+    if not found:
+        return 'no video devices (/dev/video*)\n'
+    lines = []
+    auto = next((device.path for device in found if device.usb_camera), None)
+    for device in found:
+        if device.problem:
+            words = ['cannot be asked: %s' % device.problem]
+        else:
+            words = [device.card or '(no name)', 'driver %s' % device.driver,
+                     device.bus or 'no bus info']
+        words += ['by-id %s' % link if '/by-id/' in link else 'by-path %s' % link
+                  for link in device.links]
+        if device.capture:
+            words.append('formats %s' % (' '.join(device.formats) or 'none listed'))
+        elif not device.problem:
+            words.append('not a capture device' + (
+                " (a USB camera's metadata node)" if device.driver == UVC_DRIVER else ''))
+        if device.path == auto:
+            words.append('video_device:=auto opens it')
+        lines.append('%s: %s' % (device.path, ', '.join(words)))
     return '\n'.join(lines) + '\n'

@@ -160,7 +160,7 @@ def open_problem(code: int) -> str:
 class V4L2Device:
     """A V4L2 device opened for its answers (not for streaming): caps, formats, controls."""
 
-    def __init__(self, path: str):
+    def __init__(self, path: str, capture_only: bool = True):
         self.path = path
         self._kinds = {}   # control id -> kind, as controls() last found them
         try:
@@ -173,10 +173,15 @@ class V4L2Device:
             self.close()
             raise
         self.caps = caps
-        if not caps & (CAP_VIDEO_CAPTURE | CAP_VIDEO_CAPTURE_MPLANE):
+        if capture_only and not self.capture:
             self.close()
             raise V4L2Error('not a video capture device (%s has no capture capability)'
                             % (self.card or 'it'))
+
+    @property
+    def capture(self) -> bool:
+        """Return True for a video capture node (not a UVC camera's metadata node, an output)."""
+        return bool(self.caps & (CAP_VIDEO_CAPTURE | CAP_VIDEO_CAPTURE_MPLANE))
 
     def _ioctl(self, request, buffer):
         fcntl.ioctl(self.fd, request, buffer)

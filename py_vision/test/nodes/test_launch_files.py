@@ -35,6 +35,8 @@ PROMISED = {
                                            'usbcam_subscriber'},
                            'arguments': CAMERA_ARGUMENTS | {'display', 'web_host', 'web_port',
                                                             'web_token'}},
+    'two_cameras.launch.py': {'executables': {'usbcam_publisher'},
+                              'arguments': CAMERA_ARGUMENTS | {'front_device', 'rear_device'}},
 }
 
 
@@ -211,3 +213,21 @@ def test_managed_camera_is_a_lifecycle_node_driven_to_active():
     assert any(ast.unparse(node.value) == '[activate_when_configured, camera, transition('
                'Transition.TRANSITION_CONFIGURE)]' for node in returned), \
         'the activating handler is registered before the configure request is emitted'
+
+
+def test_two_cameras_each_by_its_device_in_a_namespace_of_its_own():
+    launch_file = LaunchFile('two_cameras.launch.py')
+    assert launch_file.includes == [ros_harness.SHARE / 'launch' / 'camera.launch.py']
+    source = ast.unparse(launch_file.tree)
+    # One group per device argument: its namespace pushed, then the camera with that device.
+    (group,) = calls(launch_file.tree, 'GroupAction')
+    actions = group.args[0].elts
+    assert [call_name(action) for action in actions] == [
+        'PushRosNamespace', 'IncludeLaunchDescription']
+    assert ast.unparse(actions[0].args[0]) == "name.split('_')[0]"
+    given = ast.unparse(keyword(actions[1], 'launch_arguments'))
+    assert "'video_device': LaunchConfiguration(name)" in given
+    assert "'params_file': LaunchConfiguration('params_file')" in given
+    assert 'for name in DEVICE_ARGUMENTS' in source
+    assert sorted(name.split('_')[0] for name in launch_file.declared()
+                  if name.endswith('_device')) == ['front', 'rear']

@@ -160,6 +160,7 @@ struct jpeg_cache;
 
 struct camera {
     char dir[PATH_MAX];
+    char driver[16];                       /* QUERYCAP's driver: uvcvideo unless told */
     char card[32];
     char bus_info[32];
     char by_id[PATH_MAX];
@@ -355,6 +356,8 @@ static void load_camera(const char *dir)
         *rest++ = 0;
         if (!strcmp(line, "card")) {
             copy_text(cam->card, sizeof(cam->card), rest);
+        } else if (!strcmp(line, "driver")) {
+            copy_text(cam->driver, sizeof(cam->driver), rest);
         } else if (!strcmp(line, "bus_info")) {
             copy_text(cam->bus_info, sizeof(cam->bus_info), rest);
         } else if (!strcmp(line, "by_id")) {
@@ -2068,7 +2071,8 @@ static int do_ioctl(struct handle *h, unsigned int cmd, void *arg)
     case VIDIOC_QUERYCAP: {
         struct v4l2_capability *c = arg;
         memset(c, 0, sizeof(*c));
-        copy_text((char *)c->driver, sizeof(c->driver), "uvcvideo");
+        copy_text((char *)c->driver, sizeof(c->driver), cam->driver[0] ? cam->driver
+                                                                          : "uvcvideo");
         copy_text((char *)c->card, sizeof(c->card), cam->card);
         copy_text((char *)c->bus_info, sizeof(c->bus_info), cam->bus_info);
         c->version = kernel_version;
@@ -3075,6 +3079,9 @@ static int made_up(struct listing *l, int k, char *name, size_t size, unsigned c
     for (int i = 0; i < n_cameras; i++) {
         struct camera *cam = cameras[i];
         if (!plugged(cam))
+            continue;
+        /* A device udev made no such link for (by-id: not a USB device) is not listed. */
+        if (l->which != 0 && !(l->which == 2 ? cam->by_id : cam->by_path)[0])
             continue;
         if (seen++ != k)
             continue;
