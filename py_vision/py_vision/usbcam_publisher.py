@@ -331,10 +331,17 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         stamps follow the clock wherever it goes (also back, when a bag loops).
         """
         clock = self.get_clock()
-        now = clock.now()
         if captured is None or clock.ros_time_is_active:
-            return now  # no capture time (the read has just returned the frame), or simulated
-        age_ns = int((time.monotonic() - captured) * 1e9)
+            return clock.now()  # no capture time (the read has just returned it), or simulated
+        # The two clocks read as close together as the thread is let: a read pair cut by a
+        # preemption (a loaded machine) would move the stamp by as much, so it is read again.
+        for _ in range(3):
+            before = time.monotonic()
+            now = clock.now()
+            after = time.monotonic()
+            if after - before < 2e-4:
+                break
+        age_ns = int(((before + after) / 2 - captured) * 1e9)
         if not 0 <= age_ns < 1000000000 or age_ns > now.nanoseconds:
             return now
         return Time(nanoseconds=now.nanoseconds - age_ns, clock_type=now.clock_type)
