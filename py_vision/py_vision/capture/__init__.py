@@ -31,13 +31,26 @@ The camera layer: frame sources, the device's controls and the capture loop, wit
 - `loop`: `CaptureLoop`, open / read / lose / reopen / close on a thread of its own.
 """
 
-from py_vision.capture.camera import Camera, open_source, pixel_format_accepted
-from py_vision.capture.controls import ControlInfo, Refusal
-from py_vision.capture.loop import CaptureLoop, CaptureStats, LoopTiming
-from py_vision.capture.source import (
-    Frame, FrameFormat, FrameSize, FrameSource, SourceError, StreamFormat)
-from py_vision.capture.synthetic_device import SyntheticDevices
+import importlib
 
-__all__ = ['Camera', 'CaptureLoop', 'CaptureStats', 'ControlInfo', 'Frame', 'FrameFormat',
-           'FrameSize', 'FrameSource', 'LoopTiming', 'open_source', 'pixel_format_accepted',
-           'Refusal', 'SourceError', 'StreamFormat', 'SyntheticDevices']
+# Where each name the package gives is defined. A name is imported on first use, so that one
+# module of the package does not bring the whole camera layer along (V4L2, the capture loop,
+# YAML): cv_bridge, in every node, needs only pixel_formats.
+_WHERE = {
+    'Camera': 'camera', 'open_source': 'camera', 'pixel_format_accepted': 'camera',
+    'ControlInfo': 'controls', 'Refusal': 'controls',
+    'CaptureLoop': 'loop', 'CaptureStats': 'loop', 'LoopTiming': 'loop',
+    'Frame': 'source', 'FrameFormat': 'source', 'FrameSize': 'source',
+    'FrameSource': 'source', 'SourceError': 'source', 'StreamFormat': 'source',
+    'SyntheticDevices': 'synthetic_device',
+}
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name):
+    """Return one of the package's names, importing the module that defines it."""
+    if name not in _WHERE:
+        raise AttributeError('module %r has no attribute %r' % (__name__, name))
+    value = getattr(importlib.import_module('%s.%s' % (__name__, _WHERE[name])), name)
+    globals()[name] = value
+    return value
