@@ -52,6 +52,7 @@ import yaml
 HERE = Path(__file__).resolve().parent
 SOURCE = HERE / 'uvc_emulator' / 'uvc_emulator.c'
 CAMERAS = HERE / 'uvc_emulator' / 'cameras'
+CLIPS = HERE / 'uvc_emulator' / 'clips'
 CFLAGS = ['-O2', '-shared', '-fPIC', '-Wall']
 LIBS = ['-lpthread', '-ldl', '-lm']
 ENV_CAMERAS = 'PY_VISION_UVC_CAMERAS'
@@ -275,6 +276,11 @@ def load_model(model):
             raise ValueError('%s: py_vision has no pixel format %s' % (path, fmt['fourcc']))
         fmt.setdefault('description', pixel_format.description)
         compressed = fmt['compressed'] = pixel_format.compressed
+        if pixel_format.video:
+            if 'clip' not in fmt:
+                raise ValueError('%s: %s needs a clip (a file in %s)' % (path, fmt['fourcc'],
+                                                                         CLIPS))
+            fmt['clip'] = str(CLIPS / fmt['clip'])
         fmt['frames'] = []
         for width, height in fmt['sizes']:
             rates = sorted(fmt['rates'], reverse=True)
@@ -361,6 +367,10 @@ class EmulatedCamera:
             pixel_format = _pixel_format(fmt['fourcc'])
             flags = 1 if fmt['compressed'] else 0
             lines.append('format %s %d %s' % (pixel_format.fourcc, flags, fmt['description']))
+            if pixel_format.video:
+                # Its frames are the clip's access units (the buffers hold the largest).
+                clip = Path(fmt['clip'])
+                lines.append('clip %d %s' % (clip.stat().st_size, clip))
             # YUYV and JPEG are made from the YUYV picture with the controls' effects; any
             # other raw format from its two pictures, plane by plane.
             generic = not pixel_format.compressed and pixel_format.fourcc != 'YUYV'
@@ -374,6 +384,8 @@ class EmulatedCamera:
                 picture = cache_dir() / ('background-%dx%d-%s.yuyv' % (
                     width, height, _picture_key()))
                 size, stride = width * height * 2, pixel_format.bytesperline(width)
+                if pixel_format.video:
+                    size = Path(fmt['clip']).stat().st_size
                 if generic:
                     size = pixel_format.frame_bytes(width, height)
                     picture, white = raw_pictures(pixel_format.fourcc, width, height)
@@ -496,7 +508,11 @@ class EmulatedCamera:
         return record[1], record[3]
 
     def served_jpegs(self):
-        """Return the JPEGs served (the last 4096 at most) as `ServedJpeg`s, oldest first."""
+        """
+        Return the JPEGs served (the last 4096 at most) as `ServedJpeg`s, oldest first.
+
+        A video format's frames (its clip's access units) are recorded the same way.
+        """
         records = (self._served_record(slot) for slot in range(_SERVED_SLOTS))
         return sorted((ServedJpeg(tag - 1, length, crc, bool(flags & _SERVED_CORRUPT))
                        for tag, length, flags, crc, _ in filter(None, records)),

@@ -289,7 +289,9 @@ def _outside_overlap(width, height, other_width, other_height):
 
 def _candidates(offered: Dict[str, FrameFormat], request, output: str) -> List[PixelFormat]:
     """Return the formats auto tries, best first: those offered that py_vision converts."""
-    known = [FORMATS[fourcc] for fourcc in FORMATS if not offered or fourcc in offered]
+    # A camera's own video is never chosen for the user: its frames are a stream, not images.
+    known = [FORMATS[fourcc] for fourcc in FORMATS if (not offered or fourcc in offered)
+             and not FORMATS[fourcc].video]
     return sorted(known, key=lambda pf: _rank(pf, offered.get(pf.fourcc), request, output))
 
 

@@ -73,6 +73,15 @@ UVC_RATES = (30.0, 25.0, 20.0, 15.0, 10.0, 5.0)
 # The sizes it lists when asked (it honours any size it is set to, as a scaler would).
 LISTED_SIZES = ((160, 120), (320, 240), (640, 480), (800, 600), (1280, 720), (1920, 1080))
 _OPTIONS = 'fail_open, stop_after, unplugged_for, fail_every, formats'
+# The formats it makes pictures in: every one of the table but a camera's own video.
+_PICTURE_FORMATS = [fourcc for fourcc, listed in FORMATS.items() if not listed.video]
+
+
+def _picture_format(name):
+    """Return the format a name gives, or None when it is unknown or a camera's own video."""
+    found = find(name)
+    return None if found is None or found.video else found
+
 
 # The camera's controls, as a UVC camera reports them (V4L2 names, ids, ranges, defaults).
 CONTROLS = (
@@ -199,10 +208,10 @@ class SyntheticCamera:
                              % (unplugged_for,))
         if fail_every is not None and (int(fail_every) != fail_every or fail_every < 1):
             raise ValueError('fail_every must be an integer >= 1, got %r' % (fail_every,))
-        offered = [find(name) for name in formats]
+        offered = [_picture_format(name) for name in formats]
         if None in offered or not formats:
             raise ValueError('formats must be one or more of %s, got %s'
-                             % (', '.join(FORMATS), ','.join(formats) or 'none'))
+                             % (', '.join(_PICTURE_FORMATS), ','.join(formats) or 'none'))
         self.name = name
         self._devices = devices if devices is not None else SyntheticDevices()
         self._clock = self._devices.clock
@@ -522,9 +531,9 @@ def parse_synthetic_spec(spec):
             options[key] = _parse_number(key, value, float, 0)
         elif key == 'formats':
             options[key] = tuple(f.strip() for f in value.split(',') if f.strip())
-            if not options[key] or any(find(f) is None for f in options[key]):
+            if not options[key] or any(_picture_format(f) is None for f in options[key]):
                 raise ValueError('formats must be a comma-separated list of %s, got "%s"'
-                                 % (', '.join(FORMATS), value))
+                                 % (', '.join(_PICTURE_FORMATS), value))
         else:
             raise ValueError('unknown option "%s"; use synthetic?key=value&key=value with keys: %s'
                              % (key, _OPTIONS))

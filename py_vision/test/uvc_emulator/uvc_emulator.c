@@ -123,9 +123,22 @@ struct plane_desc {
     uint32_t across, per, down;
 };
 
+/* A recorded clip a compressed video format (H.264) serves: its access units, each from its
+ * start code and access unit delimiter (00 00 00 01 09) to the next one's, frame i of the
+ * sensor unit i % n_units. */
+struct clip {
+    uint8_t *data;
+    size_t len;
+    uint32_t n_units;
+    uint32_t *offset, *length;
+};
+
 struct format_desc {
     uint32_t fourcc, flags;
     char description[32];
+    char clip_path[PATH_MAX];              /* a video format's clip file ("" for the others) */
+    size_t clip_size;                      /* its length in bytes */
+    struct clip clip;                      /* loaded from it at the first frame */
     uint32_t n_planes;                     /* 0: YUYV or JPEG, made from the YUYV picture */
     struct plane_desc planes[MAX_PLANES];
     uint32_t n_frames;
@@ -380,6 +393,13 @@ static void load_camera(const char *dir)
                              &pl[fmt->n_planes].per, &pl[fmt->n_planes].down, &n) == 3) {
                 fmt->n_planes++;
                 used += n;
+            }
+        } else if (!strcmp(line, "clip") && fmt) {
+            int n = 0;
+            unsigned long size = 0;
+            if (sscanf(rest, "%lu %n", &size, &n) == 1) {
+                fmt->clip_size = size;
+                copy_text(fmt->clip_path, sizeof(fmt->clip_path), rest + n);
             }
         } else if (!strcmp(line, "white") && frm) {
             copy_text(frm->white, sizeof(frm->white), rest);
@@ -1459,12 +1479,71 @@ static uint32_t render_jpeg(struct handle *h, uint8_t *out, size_t cap, uint64_t
     return (uint32_t)p;
 }
 
+/* Read a clip and find its access units (called with cam->lock held); 0 or -1. */
+static int load_clip(struct format_desc *fmt)
+{
+    struct clip *c = &fmt->clip;
+    uint8_t *data = fmt->clip_size >= 5 ? malloc(fmt->clip_size) : NULL;
+    size_t got = 0;
+    if (!data || read_file(fmt->clip_path, data, fmt->clip_size, &got) != 0
+            || got != fmt->clip_size) {
+        free(data);
+        return -1;
+    }
+    uint32_t n_units = 0;
+    for (size_t i = 0; i + 5 <= got; i++)
+        if (!memcmp(data + i, "\0\0\0\1\x09", 5))
+            n_units++;
+    if (!n_units) {
+        free(data);
+        return -1;
+    }
+    c->offset = calloc(n_units, sizeof(uint32_t));
+    c->length = calloc(n_units, sizeof(uint32_t));
+    if (!c->offset || !c->length) {
+        free(c->offset);
+        free(c->length);
+        free(data);
+        return -1;
+    }
+    uint32_t k = 0;
+    for (size_t i = 0; i + 5 <= got; i++)
+        if (!memcmp(data + i, "\0\0\0\1\x09", 5))
+            c->offset[k++] = (uint32_t)i;
+    for (k = 0; k < n_units; k++)
+        c->length[k] = (k + 1 < n_units ? c->offset[k + 1] : (uint32_t)got) - c->offset[k];
+    c->data = data;
+    c->len = got;
+    c->n_units = n_units;
+    return 0;
+}
+
+/* A video format's frame: the clip's access unit for the sensor's frame, as it is. */
+static uint32_t render_clip(struct handle *h, uint8_t *out, size_t cap, uint64_t index)
+{
+    struct camera *cam = h->cam;
+    struct format_desc *fmt = &cam->formats[h->fmt];
+    pthread_mutex_lock(&cam->lock);
+    int ok = fmt->clip.n_units || load_clip(fmt) == 0;
+    pthread_mutex_unlock(&cam->lock);
+    if (!ok)
+        return 0;
+    uint32_t unit = (uint32_t)(index % fmt->clip.n_units);
+    uint32_t length = fmt->clip.length[unit];
+    if (length > cap)
+        return 0;
+    memcpy(out, fmt->clip.data + fmt->clip.offset[unit], length);
+    return length;
+}
+
 static uint32_t render_frame(struct handle *h, uint32_t b, uint64_t index)
 {
     struct camera *cam = h->cam;
     const struct format_desc *fmt = &cam->formats[h->fmt];
     const struct frame_desc *fd = &fmt->frames[h->frame];
     uint8_t *out = h->mem + (size_t)b * h->stride;
+    if (fmt->clip_path[0])
+        return render_clip(h, out, fd->sizeimage, index);
     if (fmt->fourcc == V4L2_PIX_FMT_MJPEG && cam->have_tables)
         return render_jpeg(h, out, fd->sizeimage, index);
     if (fmt->n_planes) {
@@ -1565,8 +1644,10 @@ static void *producer(void *arg)
         __atomic_fetch_add(&s->render_ns, (uint64_t)((c1.tv_sec - c0.tv_sec) * 1000000000LL
                                                      + (c1.tv_nsec - c0.tv_nsec)),
                            __ATOMIC_ACQ_REL);
-        int jpeg = !error && h->cam->served && h->cam->have_tables
-            && h->cam->formats[h->fmt].fourcc == V4L2_PIX_FMT_MJPEG;
+        /* A JPEG's or a clip's bytes vary frame to frame: the served ring records them. */
+        const struct format_desc *made = &h->cam->formats[h->fmt];
+        int jpeg = !error && h->cam->served && (made->clip_path[0] || (h->cam->have_tables
+            && made->fourcc == V4L2_PIX_FMT_MJPEG));
         uint32_t crc = jpeg ? crc32_of(h->mem + (size_t)b * h->stride, used) : 0;
         struct timeval tv = {(time_t)due, (suseconds_t)((due - (time_t)due) * 1e6)};
         pthread_mutex_lock(&h->lock);
