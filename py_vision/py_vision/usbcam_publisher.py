@@ -248,12 +248,12 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         """Return the camera's status on /diagnostics (camera_diagnostics.CameraMonitor)."""
         subscribers = {}
         if self.images is not None:
-            for publisher in self._publishers():
+            for publisher in self._topic_publishers():
                 subscribers[publisher.topic_name] = publisher.get_subscription_count()
         return self._monitor.status(self.capture.stats(), self.video_device, self.framerate,
                                     subscribers, self.lifecycle_state())
 
-    def _publishers(self):
+    def _topic_publishers(self):
         """Return the topics' publishers: images, compressed, camera_info, a camera's video."""
         own = [self.images.raw, self.images.compressed, self.info_publisher]
         return own + ([self.video.publisher.publisher] if self.video is not None else [])
@@ -430,7 +430,7 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
             return
         if self.video is not None:
             self.video.close()
-        for publisher in self._publishers():
+        for publisher in self._topic_publishers():
             self.destroy_publisher(publisher)
         self.images = self.video = None
         service = getattr(self, 'set_info_service', None)

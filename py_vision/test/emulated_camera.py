@@ -61,6 +61,14 @@ JPEG_QUALITY = 80
 # The shared state file (struct shared_state in uvc_emulator.c).
 _MAGIC = 0x45435655
 _STATE_SIZE = 4096
+# The USB bus the cameras of one state directory share (struct bus_state in uvc_emulator.c):
+# a lock word, then 16 slots of (camera key, owner, bytes per microframe).
+_BUS_FILE, _BUS_SLOT = 'usb_bus', struct.Struct('=QQII')
+_BUS_SLOTS_AT, _BUS_SLOTS = 8, 16
+# A UVC endpoint's alternate settings (bytes per 125 us microframe: 1 to 3 x 1024 at most) and
+# what a camera asks for a compressed stream, unless its data file says otherwise.
+_USB_ALTS = (128, 256, 512, 1024, 2048, 3072)
+_USB_COMPRESSED_PAYLOAD = 1024
 _OFF_NODE, _OFF_PLUGGED, _OFF_GENERATION, _OFF_STALLED, _OFF_DENIED = 4, 8, 12, 16, 20
 _OFF_OWNER, _OFF_FORMAT, _OFF_FRAME, _OFF_INTERVAL = 24, 32, 36, 40
 _OFF_SENSOR, _OFF_SERVED, _OFF_VALUES, _OFF_RENDER_NS, _OFF_WIDE = 48, 56, 64, 320, 328
@@ -348,6 +356,11 @@ class EmulatedCamera:
         corrupt = dict(m.get('corrupt_jpeg') or {})
         if 'corrupt_every' in faults:
             corrupt['every'] = faults['corrupt_every']
+        # The cameras of one state directory share one USB bus (not a device on none).
+        self.bus = Path(state_dir) / _BUS_FILE if self.bus_info.startswith('usb-') else None
+        self.bus_key = int.from_bytes(os.urandom(8), 'little') | 1
+        if self.bus is not None and not self.bus.exists():
+            self.bus.write_bytes(bytes(_STATE_SIZE))
         self._write_config(serial, port, corrupt, faults)
         self._init_state(node, faults)
 
@@ -363,6 +376,10 @@ class EmulatedCamera:
                  'corrupt_mode %s' % corrupt.get('mode', 'truncate'),
                  'drop_every %d' % int(faults.get('drop_every', 0)),
                  'error_every %d' % int(faults.get('error_every', 0))]
+        if self.bus is not None:
+            lines += ['bus %d %d %s' % (self.bus_key, m.get('usb_compressed_payload',
+                                                            _USB_COMPRESSED_PAYLOAD), self.bus),
+                      'alts %s' % ' '.join(map(str, m.get('usb_alts', _USB_ALTS)))]
         for fmt in m['formats']:
             pixel_format = _pixel_format(fmt['fourcc'])
             flags = 1 if fmt['compressed'] else 0
@@ -532,10 +549,35 @@ class EmulatedCamera:
         return env
 
     def unplug(self):
-        """Unplug: open descriptors get ENODEV and POLLERR, the paths vanish (ENOENT)."""
+        """
+        Unplug: open descriptors get ENODEV and POLLERR, the paths vanish (ENOENT).
+
+        Its bandwidth on the USB bus is free again, as the host controller frees it.
+        """
         self._put('I', _OFF_PLUGGED, 0)
         self._put('I', _OFF_GENERATION, self._get('I', _OFF_GENERATION) + 1)
         self._put('Q', _OFF_OWNER, 0)
+        for slot in self.bus_reservations(own=True):
+            with open(self.bus, 'r+b') as bus, mmap.mmap(bus.fileno(), _STATE_SIZE) as mapped:
+                mapped[slot:slot + _BUS_SLOT.size] = bytes(_BUS_SLOT.size)
+
+    def bus_reservations(self, own=False):
+        """
+        Return where the streams on this camera's bus hold bandwidth (offsets in its file).
+
+        own: only this camera's. Reservations of processes that ended are left in the file
+        (the library takes them as free); a camera on no USB bus has none.
+        """
+        if self.bus is None:
+            return []
+        data = self.bus.read_bytes()
+        found = []
+        for slot in range(_BUS_SLOTS):
+            at = _BUS_SLOTS_AT + slot * _BUS_SLOT.size
+            key = _BUS_SLOT.unpack_from(data, at)[0]
+            if key and (key == self.bus_key or not own):
+                found.append(at)
+        return found
 
     def replug(self, node=None):
         """Plug in again, at /dev/video`node` if given; by-id and by-path follow."""

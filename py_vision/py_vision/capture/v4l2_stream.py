@@ -89,6 +89,8 @@ _STREAM_TYPE = struct.pack('=I', BUF_TYPE_VIDEO_CAPTURE)
 # Why a stream does not start, by errno, where open_problem's words would not tell a user.
 STREAM_PROBLEMS = {
     errno.ENOMEM: 'the driver has no memory for the buffers',
+    # uvcvideo cannot reserve the isochronous bandwidth: other streams hold the bus.
+    errno.ENOSPC: "the USB bus is full with another camera's stream",
 }
 
 
@@ -115,6 +117,7 @@ class V4L2Source:
         self._maps: List[mmap.mmap] = []
         self._held: Optional[int] = None        # the buffer the last frame's bytes are in
         self._streaming = False
+        self._queued = False    # every buffer is with the driver (a STREAMON that failed)
         self._format: Optional[StreamFormat] = None
         self._pixel_format: Optional[PixelFormat] = None
         self._timeout_ms = 1000
@@ -182,11 +185,15 @@ class V4L2Source:
             return
         if not self._maps:
             self._map_buffers()
-        try:
-            for index in range(len(self._maps)):
-                self._queue(index)
-        except OSError as error:
-            raise _stream_error('VIDIOC_QBUF', error) from None
+        # After a STREAMON that failed (no room on the USB bus) the driver keeps the buffers
+        # queued: queued again, they would be refused.
+        if not self._queued:
+            try:
+                for index in range(len(self._maps)):
+                    self._queue(index)
+            except OSError as error:
+                raise _stream_error('VIDIOC_QBUF', error) from None
+            self._queued = True
         try:
             fcntl.ioctl(self._fd, VIDIOC_STREAMON, _STREAM_TYPE)
         except OSError as error:
@@ -229,6 +236,7 @@ class V4L2Source:
             return
         self._streaming = False
         self._held = None   # STREAMOFF takes every buffer back
+        self._queued = False
         try:
             fcntl.ioctl(self._fd, VIDIOC_STREAMOFF, _STREAM_TYPE)
         except OSError:
@@ -324,6 +332,7 @@ class V4L2Source:
 
     def _free_buffers(self) -> None:
         self.stop()
+        self._queued = False
         if not self._maps:
             return
         for mapped in self._maps:
