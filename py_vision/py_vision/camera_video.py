@@ -25,7 +25,7 @@ header of its own unit. Where this machine cannot decode, it is said once.
 from typing import Optional
 
 from py_vision.annexb import CODECS, inspect
-from py_vision.capture.pixel_formats import VIDEO_FORMATS
+from py_vision.capture.pixel_formats import OPENCV_BGR, VIDEO_FORMATS
 from py_vision.params import Parameters
 from py_vision.transport import ImagePublisher, VideoPublisher
 from py_vision.video_decoder import VideoDecoder
@@ -37,10 +37,13 @@ class CameraVideo:
     """The video topic of a camera whose frames are access units, and its decoded images."""
 
     def __init__(self, parameters: Parameters, base_topic: str, qos, fourcc: str,
-                 images: ImagePublisher):
+                 images: ImagePublisher, output: str = 'bgr8'):
         self.codec = VIDEO_FORMATS[fourcc]
         self.publisher = VideoPublisher(parameters, base_topic, qos, CODECS[self.codec])
         self._images = images
+        # Decoders give BGR: converted as a BGR camera's frames are (output_encoding).
+        self._output = output
+        self._encoding = OPENCV_BGR.native_encoding if output == 'native' else output
         self._logger = parameters.node.get_logger()
         self._decoder: Optional[VideoDecoder] = None
         self._cannot_decode = False
@@ -74,7 +77,8 @@ class CameraVideo:
     def _decoded(self, picture, header):
         """Publish a decoded picture with its own unit's header (on the decoder's thread)."""
         self.decoded += 1
-        self._images.publish(header, lambda: picture)
+        self._images.publish(header, lambda: OPENCV_BGR.convert(picture, self._output), None,
+                             self._encoding, lambda: picture)
 
     def _failed(self, reason):
         # On the decoder's thread, or the capture thread's: the next unit stops the decoder.

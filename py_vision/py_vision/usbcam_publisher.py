@@ -17,8 +17,9 @@ usbcam_publisher: a USB camera as sensor_msgs/Image, CompressedImage and CameraI
 
 The ROS 2 port of the tutorial's publisher, grown into a driver. Frames are read on a capture
 thread (the camera paces itself), stamped with their capture time and published at once: raw
-bgr8 on usb_camera/image, JPEG on usb_camera/image/compressed (the camera's own JPEG untouched
-in MJPEG mode), each only while it has subscribers, and the CameraInfo of every frame on
+on usb_camera/image (bgr8, or the `output_encoding` asked for: the camera's own pixels with
+`native`), JPEG on usb_camera/image/compressed (the camera's own JPEG untouched in MJPEG
+mode), each only while it has subscribers, and the CameraInfo of every frame on
 usb_camera/camera_info with exactly the image's header. The node is a thin adapter: it
 keeps the parameters, publishers and services; opening, reading, losing and reopening the camera
 is the camera layer's CaptureLoop (py_vision.capture), which calls publish_image() with each new
@@ -56,7 +57,7 @@ from py_vision.capture import (
     Camera, CaptureLoop, pixel_format_accepted, SourceError, SyntheticDevices)
 from py_vision.capture.devices import AUTO
 from py_vision.capture.listing import device_listing, devices_listing
-from py_vision.capture.pixel_formats import find, names_accepted
+from py_vision.capture.pixel_formats import find, names_accepted, OUTPUTS
 from py_vision.control_names import pixel_format_fourcc, USB_CAM_PIXEL_FORMATS
 from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
@@ -86,6 +87,15 @@ CONTROL_SYNC_PERIOD_S = 0.5
 # After shutdown the process ends this much later, once the answer to the transition request
 # has gone out (ending rclpy at once could lose it, and `ros2 lifecycle set` would wait).
 EXIT_AFTER_SHUTDOWN_S = 0.5
+# A TF frame name: what tf2 and every viewer take, and what survives a C string (no NUL).
+FRAME_ID_RULE = '1 to 256 printable characters, without spaces'
+_MAX_FRAME_ID = 256
+
+
+def good_frame_id(frame_id: str) -> bool:
+    """Return True when frame_id follows FRAME_ID_RULE."""
+    return 0 < len(frame_id) <= _MAX_FRAME_ID and frame_id.isprintable() and (
+        not any(character.isspace() for character in frame_id))
 
 
 class USBImagePublisher(LifecycleNodeMixin, Node):
@@ -113,10 +123,13 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
              check=lambda v: pixel_format_accepted(pixel_format_fourcc(v)),
              accepted="auto, or a FourCC: %s, or usb_cam's %s" % (
                  names_accepted(), ', '.join(USB_CAM_PIXEL_FORMATS))),
+        Spec('output_encoding', 'bgr8', 'the encoding of usb_camera/image: native publishes '
+             "the camera's pixels as sent wherever sensor_msgs has an encoding for them",
+             choices=OUTPUTS),
         Spec('jpeg_quality', 80, 'JPEG quality of usb_camera/image/compressed when encoded '
              "here (an MJPEG camera's own JPEG is published as it is)", (1, 100), live=True),
-        Spec('frame_id', 'usb_camera', 'header.frame_id of the images', check=bool,
-             accepted='a non-empty string', live=True),
+        Spec('frame_id', 'usb_camera', 'header.frame_id of the images', check=good_frame_id,
+             accepted=FRAME_ID_RULE, live=True),
         Spec('camera_name', 'usb_camera', 'camera name for the calibration (${NAME})',
              check=is_valid_camera_name, accepted='letters, digits and _'),
         Spec('camera_info_url', '', 'calibration file: file:///path.yaml or '
@@ -192,6 +205,7 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         self.size = (values['image_width'], values['image_height'])
         self.framerate = values['framerate']
         self.pixel_format = pixel_format_fourcc(values['pixel_format'])
+        self.output_encoding = values['output_encoding']
         self.frame_id = values['frame_id']
         self.jpeg_quality = values['jpeg_quality']
         self._synthetic = SyntheticDevices()
@@ -209,7 +223,8 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         self.images.jpeg_quality = self.jpeg_quality
         asked = find(self.pixel_format)
         if asked is not None and asked.video:
-            self.video = CameraVideo(self._params, IMAGE_TOPIC, qos, asked.fourcc, self.images)
+            self.video = CameraVideo(self._params, IMAGE_TOPIC, qos, asked.fourcc, self.images,
+                                     self.output_encoding)
         self.info_publisher = create_publisher(
             self._params, CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
 
@@ -277,8 +292,11 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
     def _set_camera_info(self, request, response):
         response.success, response.status_message = self.calibration.set_camera_info(
             request.camera_info)
-        log = self.get_logger().info if response.success else self.get_logger().warning
-        log('set_camera_info: %s' % response.status_message)
+        # One call site per severity: rclpy refuses one whose severity changes (ValueError).
+        if response.success:
+            self.get_logger().info('set_camera_info: %s' % response.status_message)
+        else:
+            self.get_logger().warning('set_camera_info: %s' % response.status_message)
         return response
 
     # --- capture ---------------------------------------------------------------------
@@ -286,16 +304,20 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
     def _open_camera(self):
         """Open the camera the parameters name (called by the capture loop at each (re)open)."""
         camera = Camera.open(self.video_device, self.size[0], self.size[1], self.framerate,
-                             self.pixel_format, synthetic=self._synthetic)
+                             self.pixel_format, self.output_encoding,
+                             synthetic=self._synthetic)
         where = self.video_device
         if where.strip().lower() == AUTO:
             where = '%s (%s)' % (where, camera.node)
+        encoding = self.output_encoding
+        if encoding == 'native':
+            encoding = camera.pixel_format.native_encoding
         topic = self.images.raw.topic_name
         if camera.pixel_format.video and self.video is not None:
             topic = '%s (images decoded on %s while subscribed)' % (
                 self.video.publisher.name, topic)
-        self.get_logger().info('opened %s: %s, publishing on %s' % (
-            where, camera.describe(), topic))
+        self.get_logger().info('opened %s: %s, publishing on %s%s' % (
+            where, camera.describe(), topic, '' if encoding == 'bgr8' else ' as %s' % encoding))
         for line in camera.notes:
             self.get_logger().warning(line)
         return camera
@@ -313,14 +335,29 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         # else: Ctrl-C or SIGTERM shut rclpy down while a frame was being published.
 
     def _capture_stamp(self, captured):
-        """Return the capture time (time.monotonic(), or None) of a frame as a ROS time."""
-        now = self.get_clock().now()
-        if captured is None:
-            return now  # no capture time: the read has just returned the frame
-        age_s = time.monotonic() - captured
-        if not 0 <= age_s < 1.0:
+        """
+        Return the capture time (time.monotonic(), or None) of a frame on the node's clock.
+
+        The node's clock now, less the frame's age. A simulated clock (use_sim_time, /clock)
+        does not run with the camera's time: there, and on a clock too young to hold the age
+        (a simulation starting at 0), the frame is stamped with the clock's time now, so that
+        stamps follow the clock wherever it goes (also back, when a bag loops).
+        """
+        clock = self.get_clock()
+        if captured is None or clock.ros_time_is_active:
+            return clock.now()  # no capture time (the read has just returned it), or simulated
+        # The two clocks read as close together as the thread is let: a read pair cut by a
+        # preemption (a loaded machine) would move the stamp by as much, so it is read again.
+        for _ in range(3):
+            before = time.monotonic()
+            now = clock.now()
+            after = time.monotonic()
+            if after - before < 2e-4:
+                break
+        age_ns = int(((before + after) / 2 - captured) * 1e9)
+        if not 0 <= age_ns < 1000000000 or age_ns > now.nanoseconds:
             return now
-        return Time(nanoseconds=now.nanoseconds - int(age_s * 1e9), clock_type=now.clock_type)
+        return Time(nanoseconds=now.nanoseconds - age_ns, clock_type=now.clock_type)
 
     def publish_image(self, camera, frame):
         """Publish one frame: image (raw and compressed, as subscribed) and its CameraInfo."""
@@ -331,7 +368,10 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
             raw = compressed = False
             self.video.publish(header, frame.data)
         else:
-            raw, compressed = self.images.publish(header, frame.bgr, frame.jpeg)
+            output, picture = self.output_encoding, frame.pixel_format.picture
+            raw, compressed = self.images.publish(
+                header, lambda: frame.image(output), frame.jpeg, frame.encoding(output),
+                lambda: frame.image(picture))
             self.frames_decoded += frame.decoded
         info = self.calibration.camera_info(camera.width, camera.height)
         info.header = header

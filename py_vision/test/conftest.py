@@ -16,13 +16,13 @@
 
 import os
 import shutil
-import sys
 import tempfile
 
 from emulated_camera import CompilerMissing, EmulatedCamera
 from hypothesis import settings
 import pytest
 import ros_harness
+from vivid_vm import SessionVm, VmUnavailable
 
 # A property test that fails prints the @reproduce_failure line that replays its example: the
 # falsifying example alone may not (a numpy array's repr rounds). On top of the current
@@ -40,25 +40,28 @@ if not ros_harness.SITE_PACKAGES.is_dir():
     raise pytest.UsageError(
         '%s is missing: build the package first (scripts/setup.sh, or colcon build in a '
         'workspace before colcon test)' % ros_harness.SITE_PACKAGES)
-# Before the source folder that `python -m pytest` (and so `colcon test`) puts on sys.path.
-sys.path.insert(0, str(ros_harness.SITE_PACKAGES))
-# As after `source install/setup.bash`, for code that looks itself up through the ament index.
-os.environ['AMENT_PREFIX_PATH'] = ros_harness.installed_env()['AMENT_PREFIX_PATH']
+ros_harness.import_installed_package()
 # The in-process peers' rcl log files go to a directory removed when the session ends.
 _SESSION_ROS_LOG_DIR = tempfile.mkdtemp(prefix='py_vision_test_ros_log_')
 os.environ['ROS_LOG_DIR'] = _SESSION_ROS_LOG_DIR
 
 
+# Environment variables that leave out every test using a fixture: the board-version run
+# (scripts/test.sh) has no Playwright, and leaves the vivid VM's tests to the main run (the
+# kernel's answers do not depend on the Python side's versions). Left out, not skipped:
+# nothing claims they ran.
+LEFT_OUT_BY = {'PY_VISION_BROWSER': 'browser', 'PY_VISION_VIVID': 'vivid'}
+
+
 def pytest_collection_modifyitems(config, items):
-    """With PY_VISION_BROWSER=off, leave out every test that drives a browser."""
-    # The board-version run (scripts/test.sh) has no Playwright: the browser tests are the
-    # main run's. Left out, not skipped: nothing claims they ran.
-    if os.environ.get('PY_VISION_BROWSER') != 'off':
-        return
-    browser = [item for item in items if 'browser' in getattr(item, 'fixturenames', ())]
-    if browser:
-        config.hook.pytest_deselected(items=browser)
-        items[:] = [item for item in items if item not in browser]
+    """With PY_VISION_BROWSER=off or PY_VISION_VIVID=off, leave out those tests."""
+    for variable, fixture in LEFT_OUT_BY.items():
+        if os.environ.get(variable) != 'off':
+            continue
+        left_out = [item for item in items if fixture in getattr(item, 'fixturenames', ())]
+        if left_out:
+            config.hook.pytest_deselected(items=left_out)
+            items[:] = [item for item in items if item not in left_out]
 
 
 def pytest_unconfigure(config):
@@ -95,11 +98,7 @@ def ros_env(domain_id):
     The nodes' rcl log files (ROS_LOG_DIR) go to a directory deleted after the test.
     """
     log_dir = tempfile.mkdtemp(prefix='py_vision_ros_log_')
-    env = ros_harness.installed_env()
-    env.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
-               PYTHONUNBUFFERED='1', RCUTILS_COLORIZED_OUTPUT='0', ROS_LOG_DIR=log_dir)
-    env.pop('ROS_LOCALHOST_ONLY', None)
-    yield env
+    yield ros_harness.node_env(domain_id, log_dir)
     shutil.rmtree(log_dir, ignore_errors=True)
 
 
@@ -158,3 +157,29 @@ def emulated_camera():
     for camera in made:
         camera.close()
     shutil.rmtree(state_dir, ignore_errors=True)
+
+
+@pytest.fixture(scope='session')
+def vivid_session():
+    """Give the session's vivid VM (vivid_vm.SessionVm), powered off when the session ends."""
+    session = SessionVm()
+    yield session
+    session.close()
+
+
+@pytest.fixture
+def vivid(vivid_session):
+    """
+    Give the vivid VM of this session (booted at the first test that asks): a VividVm.
+
+    ``vivid.run(function, **kwargs)`` calls ``function(vm, **kwargs)`` in the VM, on a vivid
+    device with every control at its default and a ROS domain of the call's own, and returns
+    what it returned (docs/vivid.md). Where no VM can start (vivid_vm.missing()) the test is
+    skipped with the reason, and fails in CI.
+    """
+    try:
+        return vivid_session.get()
+    except VmUnavailable as error:
+        if os.environ.get('CI') == 'true':
+            pytest.fail(str(error))
+        pytest.skip(str(error))

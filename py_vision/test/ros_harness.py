@@ -95,6 +95,28 @@ def installed_env():
     return dict(installed_env.cache)
 
 
+def import_installed_package():
+    """Make this process import the installed py_vision and find it in the ament index."""
+    # Before the source folder that `python -m pytest` (and so `colcon test`) puts on sys.path.
+    sys.path.insert(0, str(SITE_PACKAGES))
+    # As after `source install/setup.bash`, for code that looks itself up in the ament index.
+    os.environ['AMENT_PREFIX_PATH'] = installed_env()['AMENT_PREFIX_PATH']
+
+
+def node_env(domain_id, log_dir):
+    """
+    Return the environment for node processes on a test's domain.
+
+    That is the installed package, that domain, discovery kept on this host, and the nodes'
+    rcl log files in log_dir.
+    """
+    env = installed_env()
+    env.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
+               PYTHONUNBUFFERED='1', RCUTILS_COLORIZED_OUTPUT='0', ROS_LOG_DIR=log_dir)
+    env.pop('ROS_LOCALHOST_ONLY', None)
+    return env
+
+
 class DomainId:
     """An exclusive ROS_DOMAIN_ID for one test, held through a lock file."""
 

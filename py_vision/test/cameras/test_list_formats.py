@@ -22,12 +22,8 @@ file, and every control with its range, menu and value. A device that cannot be 
 error line and status 1.
 """
 
-import re
-
+from listing_text import control_line, offered
 import pytest
-
-# What the publisher prints for one size: "  1280x720: 10, 5 fps".
-SIZE_LINE = re.compile(r'^  (\d+)x(\d+): ([\d., ]+) fps$', re.MULTILINE)
 
 
 def list_formats(launch, env, device, extra=()):
@@ -35,21 +31,6 @@ def list_formats(launch, env, device, extra=()):
                   extra_args=['--list-formats'] + list(extra), env=env)
     status = node.wait_exit(20)
     return status, node.output()
-
-
-def offered(output):
-    """Return {fourcc: {(width, height): [rates]}} from a listing."""
-    found, current = {}, None
-    for line in output.splitlines():
-        header = re.match(r'^([A-Z0-9]{2,4}) \(', line)
-        if header:
-            current = found.setdefault(header.group(1), {})
-            continue
-        size = SIZE_LINE.match(line)
-        if size and current is not None:
-            current[(int(size.group(1)), int(size.group(2)))] = [
-                float(rate) for rate in size.group(3).split(', ')]
-    return found
 
 
 @pytest.mark.parametrize('model', ['webcam_1080p', 'vga_yuyv'])
@@ -66,8 +47,7 @@ def test_every_format_size_and_rate_the_camera_offers_is_listed(
     assert camera.model['product'] in out.splitlines()[0]
     assert camera.device in out.splitlines()[0]  # the by-id link, followed
     for control in camera.model['controls']:
-        line = next((line for line in out.splitlines()
-                     if line.strip().startswith(control['name'] + ' (')), None)
+        line = control_line(out, control['name'])
         assert line is not None, 'control %s missing:\n%s' % (control['name'], out)
         assert '0x%08x' % control['id'] in line
         if control['type'] == 'integer':
