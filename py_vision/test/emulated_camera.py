@@ -320,14 +320,16 @@ class EmulatedCamera:
     `serial` and `usb_port` (the by-id and by-path names; the data file's by default),
     `stalled` and `denied` (start with that fault), `corrupt_every` (overrides the data
     file's broken-JPEG period; 0: never), `drop_every` (every N-th frame lost on the way: the
-    buffers' sequence skips it) and `error_every` (every N-th buffer comes back flagged
-    V4L2_BUF_FLAG_ERROR, empty). `close()` unplugs it and removes its directory (the
+    buffers' sequence skips it), `error_every` (every N-th buffer comes back flagged
+    V4L2_BUF_FLAG_ERROR, empty) and `usb_controller` (the PCI address of its USB host
+    controller, 0000:00:14.0 by default: the cameras of one state directory on one controller
+    share its bus's bandwidth). `close()` unplugs it and removes its directory (the
     `emulated_camera` fixture does this after the test).
     """
 
     def __init__(self, state_dir, model='webcam_1080p', node=40, **faults):
         unknown = set(faults) - set(_FAULTS) - {'serial', 'corrupt_every', 'usb_port',
-                                                'drop_every', 'error_every'}
+                                                'drop_every', 'error_every', 'usb_controller'}
         if unknown:
             raise TypeError('unknown option(s) %s' % ', '.join(sorted(unknown)))
         self.model = load_model(model)
@@ -336,21 +338,24 @@ class EmulatedCamera:
         m = self.model
         serial = faults.get('serial', m.get('serial', 'EMU0000'))
         port = faults.get('usb_port', m.get('usb_port', '1'))
+        controller = faults.get('usb_controller', '0000:00:14.0')
         product = m['product']
         self.driver = m.get('driver', 'uvcvideo')
-        self.bus_info = m.get('bus_info', 'usb-0000:00:14.0-%s' % port)
+        self.bus_info = m.get('bus_info', 'usb-%s-%s' % (controller, port))
         # A device on no USB bus (a board's capture pipeline) gets no by-id link from udev.
         self.by_id = None if 'bus_info' in m else \
             '/dev/v4l/by-id/usb-%s_%s_%s-video-index0' % (
                 m['vendor'].replace(' ', '_'), product.replace(' ', '_'), serial)
-        self.by_path = m.get('by_path', '/dev/v4l/by-path/pci-0000:00:14.0-usb-0:%s:1.0-'
-                                        'video-index0' % port)
+        self.by_path = m.get('by_path', '/dev/v4l/by-path/pci-%s-usb-0:%s:1.0-video-index0' % (
+            controller, port))
         self.card = product
         corrupt = dict(m.get('corrupt_jpeg') or {})
         if 'corrupt_every' in faults:
             corrupt['every'] = faults['corrupt_every']
-        # The cameras of one state directory share one USB bus (not a device on none).
-        self.bus = Path(state_dir) / _BUS_FILE if self.bus_info.startswith('usb-') else None
+        # The cameras of one state directory on one controller share its USB bus (a device
+        # on none takes no bandwidth).
+        self.bus = Path(state_dir) / ('%s-%s' % (_BUS_FILE, controller)) \
+            if self.bus_info.startswith('usb-') else None
         self.bus_key = int.from_bytes(os.urandom(8), 'little') | 1
         if self.bus is not None and not self.bus.exists():
             self.bus.write_bytes(bytes(_STATE_SIZE))
