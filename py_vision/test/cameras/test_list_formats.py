@@ -22,7 +22,7 @@ file, and every control with its range, menu and value. A device that cannot be 
 error line and status 1.
 """
 
-from listing_text import control_line, offered
+from listing_text import control_line, formats, offered
 import pytest
 
 
@@ -33,7 +33,7 @@ def list_formats(launch, env, device, extra=()):
     return status, node.output()
 
 
-@pytest.mark.parametrize('model', ['webcam_1080p', 'vga_yuyv'])
+@pytest.mark.parametrize('model', ['webcam_1080p', 'vga_yuyv', 'synthetic'])
 def test_every_format_size_and_rate_the_camera_offers_is_listed(
         launch, emulated_camera, ros_env, model):
     camera = emulated_camera(model=model)
@@ -65,6 +65,23 @@ def test_the_synthetic_camera_lists_its_formats_and_controls(launch, ros_env):
     assert sizes['YUYV'][(1280, 720)] == [10.0, 5.0]    # limited by USB 2.0
     assert sizes['MJPG'][(1280, 720)][0] == 30.0
     assert 'auto_exposure (0x009a0901): menu 1=Manual Mode; 3=Aperture Priority Mode' in out
+
+
+def test_the_synthetic_camera_and_the_emulated_one_from_its_file_list_the_same(
+        launch, emulated_camera, ros_env):
+    # One description of a camera: what the synthetic camera offers is what the emulator
+    # serves from the same data file, formats, sizes, rates and controls alike.
+    camera = emulated_camera(model='synthetic')
+    status, emulated = list_formats(launch, camera.env(ros_env), camera.by_id)
+    assert status == 0, emulated
+    status, synthetic = list_formats(launch, ros_env, 'synthetic')
+    assert status == 0, synthetic
+    assert offered(emulated) == offered(synthetic)
+    assert formats(emulated) == formats(synthetic)
+
+    def controls(out):
+        return out[out.index('controls'):].splitlines()[1:]
+    assert controls(emulated) == controls(synthetic)
 
 
 def test_the_device_comes_from_a_params_file(launch, emulated_camera, ros_env, tmp_path):
