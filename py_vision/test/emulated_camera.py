@@ -321,15 +321,17 @@ class EmulatedCamera:
     `stalled` and `denied` (start with that fault), `corrupt_every` (overrides the data
     file's broken-JPEG period; 0: never), `drop_every` (every N-th frame lost on the way: the
     buffers' sequence skips it), `error_every` (every N-th buffer comes back flagged
-    V4L2_BUF_FLAG_ERROR, empty) and `usb_controller` (the PCI address of its USB host
-    controller, 0000:00:14.0 by default: the cameras of one state directory on one controller
-    share its bus's bandwidth). `close()` unplugs it and removes its directory (the
+    V4L2_BUF_FLAG_ERROR, empty), `streamon_errno` (VIDIOC_STREAMON fails with that errno) and
+    `usb_controller` (the PCI address of its USB host controller, 0000:00:14.0 by default:
+    the cameras of one state directory on one controller share its bus's bandwidth).
+    `close()` unplugs it and removes its directory (the
     `emulated_camera` fixture does this after the test).
     """
 
     def __init__(self, state_dir, model='webcam_1080p', node=40, **faults):
         unknown = set(faults) - set(_FAULTS) - {'serial', 'corrupt_every', 'usb_port',
-                                                'drop_every', 'error_every', 'usb_controller'}
+                                                'drop_every', 'error_every', 'streamon_errno',
+                                                'usb_controller'}
         if unknown:
             raise TypeError('unknown option(s) %s' % ', '.join(sorted(unknown)))
         self.model = load_model(model)
@@ -373,7 +375,8 @@ class EmulatedCamera:
                  'corrupt_every %d' % int(corrupt.get('every', 0)),
                  'corrupt_mode %s' % corrupt.get('mode', 'truncate'),
                  'drop_every %d' % int(faults.get('drop_every', 0)),
-                 'error_every %d' % int(faults.get('error_every', 0))]
+                 'error_every %d' % int(faults.get('error_every', 0)),
+                 'streamon_errno %d' % int(faults.get('streamon_errno', 0))]
         if self.bus is not None:
             lines += ['bus %d %d %s' % (self.bus_key, m.get('usb_compressed_payload',
                                                             _USB_COMPRESSED_PAYLOAD), self.bus),
