@@ -40,7 +40,7 @@ _WHERE = {
     'Camera': 'camera', 'open_source': 'camera', 'pixel_format_accepted': 'camera',
     'ControlInfo': 'controls', 'Refusal': 'controls',
     'CaptureLoop': 'loop', 'CaptureStats': 'loop', 'LoopTiming': 'loop',
-    'Frame': 'source', 'FrameFormat': 'source', 'FrameSize': 'source',
+    'BusFull': 'source', 'Frame': 'source', 'FrameFormat': 'source', 'FrameSize': 'source',
     'FrameSource': 'source', 'SourceError': 'source', 'StreamFormat': 'source',
     'SyntheticDevices': 'synthetic_device',
 }
