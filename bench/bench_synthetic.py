@@ -21,18 +21,12 @@ the YUYV to BGR conversion alone, which OpenCV's V4L2 backend pays for every fra
 camera too. Prints a Markdown table of medians and writes bench/results/synthetic.json.
 """
 
-from pathlib import Path
 import statistics
-import sys
 import time
 
+from bench_common import save_results
 import cv2
-
-REPO = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(REPO / 'py_vision'))
-
-from bench_common import save_results  # noqa: E402,I100
-from py_vision.capture import synthetic_device, synthetic_picture  # noqa: E402
+from py_vision.capture import synthetic_device, synthetic_picture
 
 SIZES = [(640, 480), (1280, 720), (1920, 1080)]
 SAMPLES = 200
