@@ -98,16 +98,18 @@ def test_the_device_comes_from_a_params_file(launch, emulated_camera, ros_env, t
 
 @pytest.mark.parametrize('content', ['- a list, not a mapping\n', 'usbcam_publisher: 5\n',
                                      'usbcam_publisher:\n  ros__parameters: [1, 2]\n'])
-def test_a_params_file_of_another_shape_does_not_hide_the_device(
+def test_a_params_file_the_node_could_not_read_is_one_line_and_status_2(
         launch, ros_env, tmp_path, content):
-    # A YAML file that is not a mapping of node: {ros__parameters: {...}} names no device: the
-    # listing comes from the device given with -p, never a traceback.
+    # A YAML file that is not a mapping of node: {ros__parameters: {...}}: rcl refuses it, and
+    # so does the listing, which reads the command line as the node does (ros_arguments):
+    # one line naming the file, the status of malformed arguments, never a traceback.
     params = tmp_path / 'params.yaml'
     params.write_text(content)
     status, out = list_formats(launch, ros_env, 'synthetic',
                                ['--ros-args', '--params-file', str(params)])
-    assert status == 0 and 'Traceback' not in out, out
-    assert 'YUYV' in offered(out)
+    assert status == 2 and 'Traceback' not in out, out
+    assert out.strip().count('\n') == 0 and str(params) in out, out
+    assert out.startswith('usbcam_publisher: invalid command line arguments: '), out
 
 
 def test_a_device_that_cannot_be_opened_is_one_line_and_status_1(

@@ -267,7 +267,7 @@ def test_web_viewer_port_is_released_on_shutdown(launch, sig):
 def test_two_hosts_over_a_veth_pair(ros_env, domain_id, tmp_path):
     """Board and PC: publisher and subscriber in two network namespaces joined by veth."""
     hosts = ros_harness.TwoHosts(('board', 'pc'), tag=domain_id)
-    env = dict(ros_env, ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET')
+    env = ros_harness.with_discovery(dict(ros_env), 'subnet')
     procs = []
 
     def in_host(host, name, cmd):
