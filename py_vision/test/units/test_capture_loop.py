@@ -190,23 +190,26 @@ def test_frames_flagged_as_errors_are_counted_and_never_handed_on():
 
 
 def test_frames_the_numbering_skips_are_counted_as_dropped():
+    # A reader a loaded machine holds up misses frames of the real-time camera too: whatever it
+    # missed, dropped counts exactly the frames the numbering skips.
     device = Device()
     loop, frames, log = run_loop(device)
     loop.start()
     try:
         wait_until(lambda: len(frames) >= 5, 10, what='frames')
-        assert loop.stats().dropped == 0
         device.skip.set()
         before = len(frames)
         wait_until(lambda: len(frames) >= before + 10, 10, what='frames with gaps')
         device.skip.clear()
-        stats = loop.stats()
     finally:
         loop.close()
+    indexes = [frame.index for frame in frames]
     # Every frame handed on after the skipping began follows one that never came.
-    indexes = [frame.index for frame in frames[before:before + 10]]
-    assert all(later - earlier == 2 for earlier, later in zip(indexes, indexes[1:]))
-    assert stats.dropped >= 9
+    skipping = indexes[before:before + 10]
+    assert all(later - earlier >= 2 for earlier, later in zip(skipping, skipping[1:])), indexes
+    gaps = sum(later - earlier - 1 for earlier, later in zip(indexes, indexes[1:]))
+    # Before the first frame handed on, at most its index went missing (stale ones included).
+    assert gaps <= loop.stats().dropped <= gaps + indexes[0], (loop.stats(), indexes)
 
 
 def test_pause_keeps_the_device_and_resume_drops_what_was_captured_before():
