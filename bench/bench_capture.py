@@ -71,8 +71,9 @@ WORKER = BENCH / 'capture_worker.py'
 def run(camera, env, width, height, fourcc, fps, way):
     frames = max(MIN_FRAMES, int(SECONDS * fps))
     out = subprocess.run(
-        [sys.executable, str(WORKER), camera.device, str(width), str(height), fourcc, str(fps),
-         str(frames), str(WARMUP), way], env=env, capture_output=True, text=True, timeout=180)
+        [sys.executable, str(WORKER), camera.device, str(width), str(height), fourcc,
+         str(fps), str(frames), way, str(WARMUP)],
+        env=env, capture_output=True, text=True, timeout=180)
     if out.returncode != 0:
         raise RuntimeError('%s run failed: %s' % (way, out.stderr))
     return json.loads(out.stdout.splitlines()[-1])
