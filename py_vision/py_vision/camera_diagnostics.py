@@ -16,7 +16,8 @@
 The camera's status on /diagnostics, made from what the capture loop counts.
 
 `CameraMonitor.status()` turns the loop's `CaptureStats` into the status "<node>: camera":
-ERROR while the device is lost (or not open while it should stream), WARN when the measured
+ERROR while the device is lost (or not open while it should stream, or its stream has no room
+on the USB bus: `waiting` says so), WARN when the measured
 rate is outside RATE_TOLERANCE of the requested one, no frame came for a while, or frames
 were corrupt, flagged as errors by the driver or dropped (the device's frame numbers skip)
 lately, OK otherwise. Its keys are read by other tools (the browser panel):
@@ -73,6 +74,7 @@ class CameraMonitor:
             'reconnects': stats.reconnects,
             'device present': stats.present,
             'streaming': stats.streaming,
+            'waiting': stats.waiting,
         }
         values.update(('subscribers %s' % topic.lstrip('/'), count)
                       for topic, count in subscribers.items())
@@ -88,6 +90,8 @@ class CameraMonitor:
                 return Status(ERROR, 'device lost (%d time(s)): reconnecting' % stats.lost,
                               values)
             return Status(ERROR, 'device not open', values)
+        if stats.waiting:
+            return Status(ERROR, stats.waiting, values)
         what = '%s %s' % (values['size'], values['pixel format'])
         if not new_frames and self._quiet >= QUIET_REPORTS_WARN:
             return Status(WARN, 'no frame for %d s' % self._quiet, values)

@@ -52,11 +52,12 @@ import cv2
 from py_vision import dds, ros_arguments
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
 from py_vision.camera_diagnostics import CameraMonitor
+from py_vision.camera_video import CameraVideo
 from py_vision.capture import (
     Camera, CaptureLoop, pixel_format_accepted, SourceError, SyntheticDevices)
 from py_vision.capture.devices import AUTO
 from py_vision.capture.listing import device_listing, devices_listing
-from py_vision.capture.pixel_formats import names_accepted, OUTPUTS
+from py_vision.capture.pixel_formats import find, names_accepted, OUTPUTS
 from py_vision.control_names import pixel_format_fourcc, USB_CAM_PIXEL_FORMATS
 from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
@@ -140,7 +141,7 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
     PARAMETERS = OWN_PARAMETERS + ALIAS_HELP
 
     # What close() finds when start-up was interrupted before these were made.
-    capture = controls = images = None
+    capture = controls = images = video = None
     failed = False
     _log_name = NODE_NAME
     _state = 'unconfigured'
@@ -219,6 +220,10 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         qos = publisher_qos(self.values['reliability'], self.values['depth'])
         self.images = ImagePublisher(self._params, IMAGE_TOPIC, qos, CvBridge())
         self.images.jpeg_quality = self.jpeg_quality
+        asked = find(self.pixel_format)
+        if asked is not None and asked.video:
+            self.video = CameraVideo(self._params, IMAGE_TOPIC, qos, asked.fourcc, self.images,
+                                     self.output_encoding)
         self.info_publisher = create_publisher(
             self._params, CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
 
@@ -257,10 +262,15 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         """Return the camera's status on /diagnostics (camera_diagnostics.CameraMonitor)."""
         subscribers = {}
         if self.images is not None:
-            for publisher in (self.images.raw, self.images.compressed, self.info_publisher):
+            for publisher in self._topic_publishers():
                 subscribers[publisher.topic_name] = publisher.get_subscription_count()
         return self._monitor.status(self.capture.stats(), self.video_device, self.framerate,
                                     subscribers, self.lifecycle_state())
+
+    def _topic_publishers(self):
+        """Return the topics' publishers: images, compressed, camera_info, a camera's video."""
+        own = [self.images.raw, self.images.compressed, self.info_publisher]
+        return own + ([self.video.publisher.publisher] if self.video is not None else [])
 
     def lifecycle_state(self):
         """Return the lifecycle state of a managed node; None: the plain node, always on."""
@@ -301,9 +311,12 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         encoding = self.output_encoding
         if encoding == 'native':
             encoding = camera.pixel_format.native_encoding
+        topic = self.images.raw.topic_name
+        if camera.pixel_format.video and self.video is not None:
+            topic = '%s (images decoded on %s while subscribed)' % (
+                self.video.publisher.name, topic)
         self.get_logger().info('opened %s: %s, publishing on %s%s' % (
-            where, camera.describe(), self.images.raw.topic_name,
-            '' if encoding == 'bgr8' else ' as %s' % encoding))
+            where, camera.describe(), topic, '' if encoding == 'bgr8' else ' as %s' % encoding))
         for line in camera.notes:
             self.get_logger().warning(line)
         return camera
@@ -349,11 +362,16 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         """Publish one frame: image (raw and compressed, as subscribed) and its CameraInfo."""
         header = Header(stamp=self._capture_stamp(frame.capture_time).to_msg(),
                         frame_id=self.frame_id)
-        output, picture = self.output_encoding, frame.pixel_format.picture
-        raw, compressed = self.images.publish(
-            header, lambda: frame.image(output), frame.jpeg, frame.encoding(output),
-            lambda: frame.image(picture))
-        self.frames_decoded += frame.decoded
+        if frame.pixel_format.video:
+            # An access unit: out as it is; images come from its decoder (camera_video).
+            raw = compressed = False
+            self.video.publish(header, frame.data)
+        else:
+            output, picture = self.output_encoding, frame.pixel_format.picture
+            raw, compressed = self.images.publish(
+                header, lambda: frame.image(output), frame.jpeg, frame.encoding(output),
+                lambda: frame.image(picture))
+            self.frames_decoded += frame.decoded
         info = self.calibration.camera_info(camera.width, camera.height)
         info.header = header
         self.info_publisher.publish(info)
@@ -449,9 +467,11 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
     def _release_topics(self):
         if self.images is None:
             return
-        for publisher in (self.images.raw, self.images.compressed, self.info_publisher):
+        if self.video is not None:
+            self.video.close()
+        for publisher in self._topic_publishers():
             self.destroy_publisher(publisher)
-        self.images = None
+        self.images = self.video = None
         service = getattr(self, 'set_info_service', None)
         if service is not None:
             self.destroy_service(service)
@@ -484,6 +504,11 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
                     self._state, capture.stats().frames))
             else:
                 logger.info('stopped in state %s; no camera was open' % self._state)
+        elif started and self.video is not None:
+            logger.info('camera released after %d frames (%d %s published; %d decoded for '
+                        'the image topics)' % (capture.stats().frames, self.video.published,
+                                               self.video.publisher.format.upper(),
+                                               self.video.decoded))
         elif started:
             logger.info('camera released after %d frames (%d raw, %d compressed published; '
                         '%d JPEG encoded, %d decoded)' % (

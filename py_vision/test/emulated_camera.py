@@ -51,6 +51,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 SOURCE = HERE / 'uvc_emulator' / 'uvc_emulator.c'
 CAMERAS = HERE / 'uvc_emulator' / 'cameras'
+CLIPS = HERE / 'uvc_emulator' / 'clips'
 CFLAGS = ['-O2', '-shared', '-fPIC', '-Wall']
 LIBS = ['-lpthread', '-ldl', '-lm']
 ENV_CAMERAS = 'PY_VISION_UVC_CAMERAS'
@@ -59,6 +60,14 @@ JPEG_QUALITY = 80
 # The shared state file (struct shared_state in uvc_emulator.c).
 _MAGIC = 0x45435655
 _STATE_SIZE = 4096
+# The USB bus the cameras of one state directory share (struct bus_state in uvc_emulator.c):
+# a lock word, then 16 slots of (camera key, owner, bytes per microframe).
+_BUS_FILE, _BUS_SLOT = 'usb_bus', struct.Struct('=QQII')
+_BUS_SLOTS_AT, _BUS_SLOTS = 8, 16
+# A UVC endpoint's alternate settings (bytes per 125 us microframe: 1 to 3 x 1024 at most) and
+# what a camera asks for a compressed stream, unless its data file says otherwise.
+_USB_ALTS = (128, 256, 512, 1024, 2048, 3072)
+_USB_COMPRESSED_PAYLOAD = 1024
 _OFF_NODE, _OFF_PLUGGED, _OFF_GENERATION, _OFF_STALLED, _OFF_DENIED = 4, 8, 12, 16, 20
 _OFF_OWNER, _OFF_FORMAT, _OFF_FRAME, _OFF_INTERVAL = 24, 32, 36, 40
 _OFF_SENSOR, _OFF_SERVED, _OFF_VALUES, _OFF_RENDER_NS, _OFF_WIDE = 48, 56, 64, 320, 328
@@ -284,6 +293,11 @@ def load_model(model):
     for fmt, offered in zip(data['formats'], described.formats):
         fmt['description'] = offered.description
         fmt['compressed'] = offered.pixel_format.compressed
+        if offered.pixel_format.video:
+            if 'clip' not in fmt:
+                raise ValueError('%s: %s needs a clip (a file in %s)' % (path, fmt['fourcc'],
+                                                                         CLIPS))
+            fmt['clip'] = str(CLIPS / fmt['clip'])
         fmt['frames'] = [{'width': size.width, 'height': size.height, 'rates': list(size.rates),
                           'intervals': [(1, rate) for rate in size.rates]}
                          for size in described.frame_sizes(offered)]
@@ -306,16 +320,18 @@ class EmulatedCamera:
     `serial` and `usb_port` (the by-id and by-path names; the data file's by default),
     `stalled` and `denied` (start with that fault), `corrupt_every` (overrides the data
     file's broken-JPEG period; 0: never), `drop_every` (every N-th frame lost on the way: the
-    buffers' sequence skips it) and `error_every` (every N-th buffer comes back flagged
-    V4L2_BUF_FLAG_ERROR, empty), `streamon_errno` (VIDIOC_STREAMON fails with that errno, as
-    uvcvideo's does with ENOSPC when the USB bus has no bandwidth left). `close()` unplugs it
-    and removes its directory (the
+    buffers' sequence skips it), `error_every` (every N-th buffer comes back flagged
+    V4L2_BUF_FLAG_ERROR, empty), `streamon_errno` (VIDIOC_STREAMON fails with that errno) and
+    `usb_controller` (the PCI address of its USB host controller, 0000:00:14.0 by default:
+    the cameras of one state directory on one controller share its bus's bandwidth).
+    `close()` unplugs it and removes its directory (the
     `emulated_camera` fixture does this after the test).
     """
 
     def __init__(self, state_dir, model='webcam_1080p', node=40, **faults):
         unknown = set(faults) - set(_FAULTS) - {'serial', 'corrupt_every', 'usb_port',
-                                                'drop_every', 'error_every', 'streamon_errno'}
+                                                'drop_every', 'error_every', 'streamon_errno',
+                                                'usb_controller'}
         if unknown:
             raise TypeError('unknown option(s) %s' % ', '.join(sorted(unknown)))
         self.model = load_model(model)
@@ -324,19 +340,27 @@ class EmulatedCamera:
         m = self.model
         serial = faults.get('serial', m.get('serial', 'EMU0000'))
         port = faults.get('usb_port', m.get('usb_port', '1'))
+        controller = faults.get('usb_controller', '0000:00:14.0')
         product = m['product']
         self.driver = m.get('driver', 'uvcvideo')
-        self.bus_info = m.get('bus_info', 'usb-0000:00:14.0-%s' % port)
+        self.bus_info = m.get('bus_info', 'usb-%s-%s' % (controller, port))
         # A device on no USB bus (a board's capture pipeline) gets no by-id link from udev.
         self.by_id = None if 'bus_info' in m else \
             '/dev/v4l/by-id/usb-%s_%s_%s-video-index0' % (
                 m['vendor'].replace(' ', '_'), product.replace(' ', '_'), serial)
-        self.by_path = m.get('by_path', '/dev/v4l/by-path/pci-0000:00:14.0-usb-0:%s:1.0-'
-                                        'video-index0' % port)
+        self.by_path = m.get('by_path', '/dev/v4l/by-path/pci-%s-usb-0:%s:1.0-video-index0' % (
+            controller, port))
         self.card = product
         corrupt = dict(m.get('corrupt_jpeg') or {})
         if 'corrupt_every' in faults:
             corrupt['every'] = faults['corrupt_every']
+        # The cameras of one state directory on one controller share its USB bus (a device
+        # on none takes no bandwidth).
+        self.bus = Path(state_dir) / ('%s-%s' % (_BUS_FILE, controller)) \
+            if self.bus_info.startswith('usb-') else None
+        self.bus_key = int.from_bytes(os.urandom(8), 'little') | 1
+        if self.bus is not None and not self.bus.exists():
+            self.bus.write_bytes(bytes(_STATE_SIZE))
         self._write_config(serial, port, corrupt, faults)
         self._init_state(node, faults)
 
@@ -353,10 +377,18 @@ class EmulatedCamera:
                  'drop_every %d' % int(faults.get('drop_every', 0)),
                  'error_every %d' % int(faults.get('error_every', 0)),
                  'streamon_errno %d' % int(faults.get('streamon_errno', 0))]
+        if self.bus is not None:
+            lines += ['bus %d %d %s' % (self.bus_key, m.get('usb_compressed_payload',
+                                                            _USB_COMPRESSED_PAYLOAD), self.bus),
+                      'alts %s' % ' '.join(map(str, m.get('usb_alts', _USB_ALTS)))]
         for fmt in m['formats']:
             pixel_format = _pixel_format(fmt['fourcc'])
             flags = 1 if fmt['compressed'] else 0
             lines.append('format %s %d %s' % (pixel_format.fourcc, flags, fmt['description']))
+            if pixel_format.video:
+                # Its frames are the clip's access units (the buffers hold the largest).
+                clip = Path(fmt['clip'])
+                lines.append('clip %d %s' % (clip.stat().st_size, clip))
             # YUYV and JPEG are made from the YUYV picture with the controls' effects; any
             # other raw format from its two pictures, plane by plane.
             generic = not pixel_format.compressed and pixel_format.fourcc != 'YUYV'
@@ -370,6 +402,8 @@ class EmulatedCamera:
                 picture = cache_dir() / ('background-%dx%d-%s.yuyv' % (
                     width, height, _picture_key()))
                 size, stride = width * height * 2, pixel_format.bytesperline(width)
+                if pixel_format.video:
+                    size = Path(fmt['clip']).stat().st_size
                 if generic:
                     size = pixel_format.frame_bytes(width, height)
                     picture, white = raw_pictures(pixel_format.fourcc, width, height)
@@ -492,7 +526,11 @@ class EmulatedCamera:
         return record[1], record[3]
 
     def served_jpegs(self):
-        """Return the JPEGs served (the last 4096 at most) as `ServedJpeg`s, oldest first."""
+        """
+        Return the JPEGs served (the last 4096 at most) as `ServedJpeg`s, oldest first.
+
+        A video format's frames (its clip's access units) are recorded the same way.
+        """
         records = (self._served_record(slot) for slot in range(_SERVED_SLOTS))
         return sorted((ServedJpeg(tag - 1, length, crc, bool(flags & _SERVED_CORRUPT))
                        for tag, length, flags, crc, _ in filter(None, records)),
@@ -512,10 +550,35 @@ class EmulatedCamera:
         return env
 
     def unplug(self):
-        """Unplug: open descriptors get ENODEV and POLLERR, the paths vanish (ENOENT)."""
+        """
+        Unplug: open descriptors get ENODEV and POLLERR, the paths vanish (ENOENT).
+
+        Its bandwidth on the USB bus is free again, as the host controller frees it.
+        """
         self._put('I', _OFF_PLUGGED, 0)
         self._put('I', _OFF_GENERATION, self._get('I', _OFF_GENERATION) + 1)
         self._put('Q', _OFF_OWNER, 0)
+        for slot in self.bus_reservations(own=True):
+            with open(self.bus, 'r+b') as bus, mmap.mmap(bus.fileno(), _STATE_SIZE) as mapped:
+                mapped[slot:slot + _BUS_SLOT.size] = bytes(_BUS_SLOT.size)
+
+    def bus_reservations(self, own=False):
+        """
+        Return where the streams on this camera's bus hold bandwidth (offsets in its file).
+
+        own: only this camera's. Reservations of processes that ended are left in the file
+        (the library takes them as free); a camera on no USB bus has none.
+        """
+        if self.bus is None:
+            return []
+        data = self.bus.read_bytes()
+        found = []
+        for slot in range(_BUS_SLOTS):
+            at = _BUS_SLOTS_AT + slot * _BUS_SLOT.size
+            key = _BUS_SLOT.unpack_from(data, at)[0]
+            if key and (key == self.bus_key or not own):
+                found.append(at)
+        return found
 
     def replug(self, node=None):
         """Plug in again, at /dev/video`node` if given; by-id and by-path follow."""

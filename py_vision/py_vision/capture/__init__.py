@@ -35,9 +35,10 @@ from py_vision.capture.camera import Camera, open_source, pixel_format_accepted
 from py_vision.capture.controls import ControlInfo, Refusal
 from py_vision.capture.loop import CaptureLoop, CaptureStats, LoopTiming
 from py_vision.capture.source import (
-    Frame, FrameFormat, FrameSize, FrameSource, SourceError, StreamFormat)
+    BusFull, Frame, FrameFormat, FrameSize, FrameSource, SourceError, StreamFormat)
 from py_vision.capture.synthetic_device import SyntheticDevices
 
-__all__ = ['Camera', 'CaptureLoop', 'CaptureStats', 'ControlInfo', 'Frame', 'FrameFormat',
-           'FrameSize', 'FrameSource', 'LoopTiming', 'open_source', 'pixel_format_accepted',
-           'Refusal', 'SourceError', 'StreamFormat', 'SyntheticDevices']
+__all__ = ['BusFull', 'Camera', 'CaptureLoop', 'CaptureStats', 'ControlInfo', 'Frame',
+           'FrameFormat', 'FrameSize', 'FrameSource', 'LoopTiming', 'open_source',
+           'pixel_format_accepted', 'Refusal', 'SourceError', 'StreamFormat',
+           'SyntheticDevices']

@@ -27,6 +27,7 @@ own (`ControlInfo`), addressed by V4L2 id, and checked against what the device r
 they reach it.
 """
 
+import errno
 import os
 from typing import Dict, List, Mapping, Optional, Tuple
 
@@ -37,7 +38,7 @@ from py_vision.capture.devices import CAMERA, classify, FILE
 from py_vision.capture.opencv_env import prepare_opencv
 from py_vision.capture.pixel_formats import COLOUR_OUTPUTS, find, FORMATS, PixelFormat
 from py_vision.capture.source import (
-    Clock, Frame, FrameFormat, FrameSource, MONOTONIC, SourceError, StreamFormat)
+    BusFull, Clock, Frame, FrameFormat, FrameSource, MONOTONIC, SourceError, StreamFormat)
 from py_vision.capture.synthetic_device import SyntheticDevices
 from py_vision.capture.v4l2 import V4L2Error
 from py_vision.capture.v4l2_stream import V4L2Source
@@ -201,12 +202,21 @@ class Camera:
         return line
 
     def start(self) -> None:
-        """Start streaming (again); SourceError (one line) when the device will not."""
+        """
+        Start streaming (again); SourceError (one line) when the device will not.
+
+        BusFull when the USB bus has no room for the stream now: another camera's stream
+        takes it, and trying again later may succeed.
+        """
         if self.streaming:
             return
         try:
             self.source.start()
         except V4L2Error as error:
+            if error.errno == errno.ENOSPC:
+                raise BusFull('cannot stream from video_device "%s": %s; use pixel_format '
+                              'mjpg or h264, or a smaller size or rate (retrying)' % (
+                                  self.device, error.reason)) from None
             raise SourceError('cannot stream from video_device "%s": %s' % (
                 self.device, error.reason)) from None
         self.streaming = True
@@ -289,7 +299,9 @@ def _outside_overlap(width, height, other_width, other_height):
 
 def _candidates(offered: Dict[str, FrameFormat], request, output: str) -> List[PixelFormat]:
     """Return the formats auto tries, best first: those offered that py_vision converts."""
-    known = [FORMATS[fourcc] for fourcc in FORMATS if not offered or fourcc in offered]
+    # A camera's own video is never chosen for the user: its frames are a stream, not images.
+    known = [FORMATS[fourcc] for fourcc in FORMATS if (not offered or fourcc in offered)
+             and not FORMATS[fourcc].video]
     return sorted(known, key=lambda pf: _rank(pf, offered.get(pf.fourcc), request, output))
 
 

@@ -48,6 +48,9 @@ def _what_it_gives(fourcc: str) -> str:
         return 'not a format py_vision converts'
     if pixel_format.jpeg:
         return "compressed: the camera's JPEG is published as it is"
+    if pixel_format.video:
+        return ("compressed video: the camera's access units are published as they are "
+                '(pixel_format:=%s)' % pixel_format.fourcc.lower())
     if pixel_format.encoding is None:
         return 'native: %s (sensor_msgs has no encoding for it)' % pixel_format.native_encoding
     return 'native: %s' % pixel_format.encoding

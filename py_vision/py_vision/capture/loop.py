@@ -31,12 +31,14 @@ interface that maps onto a lifecycle node:
 
 A device that fails (reads fail, or no frame for `stall_periods` frame periods: a stall) is
 lost: it is released and reopened with back-off, and the controls set through the loop are
-applied again. Frames captured before the loop (re)started reading are stale and dropped; a
-frame the driver flagged as an error, or a corrupt one, is counted and dropped; frames the
-device's numbering skips are counted as dropped: on_frame sees only new, whole frames, and a
-frame found corrupt while on_frame decodes it (`Frame.image()` None) is counted too (on_frame
-publishes no part of it). A frame's bytes are valid while on_frame runs. `stats()` gives the
-counters diagnostics report.
+applied again. A stream the USB bus has no room for (another camera's stream takes it:
+`BusFull`) is tried again with the same back-off, the device kept open, and `stats().waiting`
+says why nothing streams meanwhile. Frames captured before the loop (re)started reading are
+stale and dropped; a frame the driver flagged as an error, or a corrupt one, is counted and
+dropped; frames the device's numbering skips are counted as dropped: on_frame sees only new,
+whole frames, and a frame found corrupt while on_frame decodes it (`Frame.image()` None) is
+counted too (on_frame publishes no part of it). A frame's bytes are valid while on_frame runs.
+`stats()` gives the counters diagnostics report.
 """
 
 from dataclasses import dataclass, replace
@@ -46,7 +48,7 @@ from typing import Callable, Dict, List, Mapping, Optional, Sequence
 from py_vision.capture.camera import Camera
 from py_vision.capture.controls import ControlInfo, Refusal
 from py_vision.capture.frame_memory import keep_frame_buffers
-from py_vision.capture.source import Clock, Frame, MONOTONIC, SourceError
+from py_vision.capture.source import BusFull, Clock, Frame, MONOTONIC, SourceError
 
 __all__ = ['CaptureLoop', 'CaptureStats', 'LoopTiming']
 
@@ -82,6 +84,7 @@ class CaptureStats:
     height: int = 0
     fps: float = 0.0         # the rate the device was set to
     measured_fps: float = 0.0  # the rate frames arrived at over the last second or so
+    waiting: str = ''        # why the open device does not stream now (BusFull), in one line
 
 
 class CaptureLoop:
@@ -150,7 +153,12 @@ class CaptureLoop:
         with self._lock:
             if self._camera is None:
                 self._set_camera(self._open_camera())
-            self._camera.start()
+            try:
+                self._camera.start()
+            except BusFull as error:
+                # Not an error of the configuration: the capture thread waits for room.
+                self._log.warning(str(error))
+                self._update(waiting=str(error))
         self._stop.clear()
         self._last_index = None
         self._not_before = self._clock.now()
@@ -285,8 +293,8 @@ class CaptureLoop:
         first = True   # no frame yet from this camera
         while not stopped():
             camera = self._camera
-            if camera is None:
-                if self._reopen():
+            if camera is None or not camera.streaming:
+                if (self._reopen() if camera is None else self._wait_for_room(camera)):
                     last_frame = self._not_before = now_fn()
                     first, self._last_index = True, None
                 continue
@@ -360,6 +368,39 @@ class CaptureLoop:
                      stalls=self._stats.stalls + (stalled_s is not None))
         self._rate_start, self._rate_frames, self._rate = 0.0, 0, 0.0
 
+    def _wait_for_room(self, camera) -> bool:
+        """
+        Start the stream the bus had no room for, with back-off; True once it streams.
+
+        False when the loop stops, or the device fails otherwise (it is then lost).
+        """
+        attempt = 0
+        last_log = self._clock.now()   # start() has said it once already
+        backoff = self._timing.backoff_s
+        while not self._stop.wait(backoff[min(attempt, len(backoff) - 1)]):
+            attempt += 1
+            try:
+                with self._lock:
+                    camera.start()
+            except BusFull as error:
+                now = self._clock.now()
+                if now - last_log >= self._timing.log_period_s:
+                    last_log = now
+                    self._log.warning(str(error))
+                continue
+            except SourceError as error:   # unplugged meanwhile: lost, reopened
+                self._log.warning('%s; releasing it and reopening' % error)
+                with self._lock:
+                    self._set_camera(None)
+                camera.release()
+                self._update(lost=self._stats.lost + 1, waiting='')
+                return False
+            self._update(waiting='')
+            self._log.info('%s streams after %d attempt(s): the bus has room again' % (
+                self._name, attempt))
+            return True
+        return False
+
     def _reopen(self) -> bool:
         """Try to reopen the device with back-off until it is back or the loop stops."""
         attempt = 0
@@ -378,6 +419,9 @@ class CaptureLoop:
                     self._set_camera(camera)
                     try:
                         camera.start()
+                    except BusFull as error:
+                        self._log.warning(str(error))   # _wait_for_room goes on from here
+                        self._update(waiting=str(error))
                     except SourceError:
                         self._set_camera(None)
                         camera.release()
@@ -389,7 +433,8 @@ class CaptureLoop:
                     self._log.warning('reopen attempt %d failed: %s' % (attempt, error))
                 continue
             self._update(reconnects=self._stats.reconnects + 1)
-            self._log.info('%s is back after %d attempt(s); publishing resumes' % (
-                self._name, attempt))
+            self._log.info('%s is back after %d attempt(s); %s' % (
+                self._name, attempt, 'waiting for room on its USB bus' if self._stats.waiting
+                else 'publishing resumes'))
             return True
         return False

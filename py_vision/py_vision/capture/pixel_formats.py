@@ -23,7 +23,9 @@ Jazzy's define mono8, mono16, rgb8, bgr8, the 8-bit Bayer patterns, yuv422 for U
 yuv422_yuy2 for YUYV, nv21 and nv24), whether it is compressed, how its bytes lie in a buffer
 (`Plane`s: bytes per pixel across, pixels per row down, which also give its bus cost) and how
 it converts to bgr8, rgb8, mono8 and mono16 (OpenCV on a view of the buffer, with what that
-costs). Negotiation (`auto`), listing, diagnostics, the frames, the synthetic camera and the
+costs). A camera's own video (H.264, HEVC) is compressed and has no conversion of a frame on
+its own: its frames are decoded as a stream (video_decoder), and `auto` never chooses it.
+Negotiation (`auto`), listing, diagnostics, the frames, the synthetic camera and the
 emulated test cameras all read it; `from_yuyv` is how the test cameras make a format from their
 YUYV picture. A new format is one entry in `_table()`.
 """
@@ -35,7 +37,8 @@ import cv2
 import numpy as np
 
 __all__ = ['COLOUR_OUTPUTS', 'find', 'FORMATS', 'fourcc_code', 'fourcc_text', 'JPEG_FORMATS',
-           'names_accepted', 'nv24_as_yuyv', 'OPENCV_BGR', 'OUTPUTS', 'PixelFormat', 'Plane']
+           'names_accepted', 'nv24_as_yuyv', 'OPENCV_BGR', 'OUTPUTS', 'PixelFormat', 'Plane',
+           'VIDEO_FORMATS']
 
 # What a frame converts to; 'native' is the camera's own pixels.
 OUTPUTS = ('bgr8', 'rgb8', 'mono8', 'mono16', 'native')
@@ -84,6 +87,11 @@ class PixelFormat:
     def compressed(self) -> bool:
         """Return True for a compressed format (its frames' sizes vary)."""
         return not self.planes
+
+    @property
+    def video(self) -> bool:
+        """Return True for a camera's own video: its frames are access units of a stream."""
+        return self.fourcc in VIDEO_FORMATS
 
     @property
     def jpeg(self) -> bool:
@@ -396,10 +404,15 @@ def _table():
             _bayer(opencv_name), _ONE, from_yuyv=_mosaic(pattern)))
     for fourcc, description in (('MJPG', 'Motion-JPEG'), ('JPEG', 'JFIF JPEG')):
         formats.append(PixelFormat(fourcc, description, None, _jpeg()))
+    for fourcc, description in (('H264', 'H.264'), ('HEVC', 'HEVC')):
+        formats.append(PixelFormat(fourcc, description, None, {}))
     return {pixel_format.fourcc: pixel_format for pixel_format in formats}
 
 
 JPEG_FORMATS = ('MJPG', 'JPEG')
+# A camera's own video, published as it comes (transport.VideoPublisher): V4L2's FourCC -> the
+# codec video_decoder and annexb take.
+VIDEO_FORMATS = {'H264': 'h264', 'HEVC': 'hevc'}
 # Every format, in the order `auto` prefers them when they cost the same.
 FORMATS: Dict[str, PixelFormat] = _table()
 # The layout of OpenCV's own images (what a video file gives).

@@ -35,12 +35,16 @@ import numpy as np
 from py_vision.capture.controls import ControlInfo
 from py_vision.capture.pixel_formats import find, PixelFormat
 
-__all__ = ['Clock', 'FrameFormat', 'FrameSize', 'FrameSource', 'Frame', 'MONOTONIC',
+__all__ = ['BusFull', 'Clock', 'FrameFormat', 'FrameSize', 'FrameSource', 'Frame', 'MONOTONIC',
            'SourceError', 'StreamFormat']
 
 
 class SourceError(Exception):
     """A video_device that cannot be opened; the message is one line naming it."""
+
+
+class BusFull(SourceError):
+    """The camera's stream does not fit on its USB bus now (other streams take it): retry."""
 
 
 class Clock(Protocol):

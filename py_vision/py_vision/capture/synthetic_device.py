@@ -69,6 +69,15 @@ from py_vision.capture.synthetic_picture import (
 MAX_SIZE = 8192
 MAX_FPS = 1000.0
 _OPTIONS = 'fail_open, stop_after, unplugged_for, fail_every, formats'
+# The formats it makes pictures in: every one of the table but a camera's own video.
+_PICTURE_FORMATS = [fourcc for fourcc, listed in FORMATS.items() if not listed.video]
+
+
+def _picture_format(name):
+    """Return the format a name gives, or None when it is unknown or a camera's own video."""
+    found = find(name)
+    return None if found is None or found.video else found
+
 
 MODEL = camera_model.load(camera_model.SYNTHETIC)
 _CONTROL_OF = {control.info.cid: control for control in MODEL.controls}
@@ -186,10 +195,10 @@ class SyntheticCamera:
                              % (unplugged_for,))
         if fail_every is not None and (int(fail_every) != fail_every or fail_every < 1):
             raise ValueError('fail_every must be an integer >= 1, got %r' % (fail_every,))
-        offered = [find(name) for name in formats]
+        offered = [_picture_format(name) for name in formats]
         if None in offered or not formats:
             raise ValueError('formats must be one or more of %s, got %s'
-                             % (', '.join(FORMATS), ','.join(formats) or 'none'))
+                             % (', '.join(_PICTURE_FORMATS), ','.join(formats) or 'none'))
         self.name = name
         self._devices = devices if devices is not None else SyntheticDevices()
         self._clock = self._devices.clock
@@ -513,9 +522,9 @@ def parse_synthetic_spec(spec):
             options[key] = _parse_number(key, value, float, 0)
         elif key == 'formats':
             options[key] = tuple(f.strip() for f in value.split(',') if f.strip())
-            if not options[key] or any(find(f) is None for f in options[key]):
+            if not options[key] or any(_picture_format(f) is None for f in options[key]):
                 raise ValueError('formats must be a comma-separated list of %s, got "%s"'
-                                 % (', '.join(FORMATS), value))
+                                 % (', '.join(_PICTURE_FORMATS), value))
         else:
             raise ValueError('unknown option "%s"; use synthetic?key=value&key=value with keys: %s'
                              % (key, _OPTIONS))

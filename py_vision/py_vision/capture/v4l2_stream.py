@@ -104,6 +104,8 @@ _STREAM_TYPE = struct.pack('=I', BUF_TYPE_VIDEO_CAPTURE)
 # Why a stream does not start, by errno, where open_problem's words would not tell a user.
 STREAM_PROBLEMS = {
     errno.ENOMEM: 'the driver has no memory for the buffers',
+    # uvcvideo cannot reserve the isochronous bandwidth: other streams hold the bus.
+    errno.ENOSPC: "the USB bus is full with another camera's stream",
 }
 
 
@@ -131,6 +133,7 @@ class V4L2Source:
         self._arrays: List[np.ndarray] = []     # each buffer's bytes, made once
         self._held: Optional[int] = None        # the buffer the last frame's bytes are in
         self._streaming = False
+        self._queued = False    # every buffer is with the driver (a STREAMON that failed)
         self._format: Optional[StreamFormat] = None
         self._pixel_format: Optional[PixelFormat] = None
         self._timeout = 1.0
@@ -205,11 +208,15 @@ class V4L2Source:
             # emulation of a driver that has read I/O (vivid), which takes the queue.
             self._poll.register(self._fd, select.EPOLLIN)
             self._polled = True
-        try:
-            for index in range(len(self._maps)):
-                self._queue(index)
-        except OSError as error:
-            raise _stream_error('VIDIOC_QBUF', error) from None
+        # After a STREAMON that failed (no room on the USB bus) the driver keeps the buffers
+        # queued: queued again, they would be refused.
+        if not self._queued:
+            try:
+                for index in range(len(self._maps)):
+                    self._queue(index)
+            except OSError as error:
+                raise _stream_error('VIDIOC_QBUF', error) from None
+            self._queued = True
         try:
             fcntl.ioctl(self._fd, VIDIOC_STREAMON, _STREAM_TYPE)
         except OSError as error:
@@ -249,6 +256,7 @@ class V4L2Source:
             return
         self._streaming = False
         self._held = None   # STREAMOFF takes every buffer back
+        self._queued = False
         try:
             fcntl.ioctl(self._fd, VIDIOC_STREAMOFF, _STREAM_TYPE)
         except OSError:
@@ -334,6 +342,7 @@ class V4L2Source:
 
     def _free_buffers(self) -> None:
         self.stop()
+        self._queued = False
         if self._polled:
             self._poll.unregister(self._fd)
             self._polled = False

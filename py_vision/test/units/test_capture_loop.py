@@ -195,18 +195,20 @@ def test_frames_the_numbering_skips_are_counted_as_dropped():
     loop.start()
     try:
         wait_until(lambda: len(frames) >= 5, 10, what='frames')
-        assert loop.stats().dropped == 0
         device.skip.set()
         before = len(frames)
         wait_until(lambda: len(frames) >= before + 10, 10, what='frames with gaps')
         device.skip.clear()
+        seen = list(frames)
         stats = loop.stats()
     finally:
         loop.close()
+    # A reader the machine's load makes late misses frames of this 100 fps camera too: the
+    # numbering shows those, and they count as dropped as well.
+    gaps = [later.index - earlier.index for earlier, later in zip(seen, seen[1:])]
     # Every frame handed on after the skipping began follows one that never came.
-    indexes = [frame.index for frame in frames[before:before + 10]]
-    assert all(later - earlier == 2 for earlier, later in zip(indexes, indexes[1:]))
-    assert stats.dropped >= 9
+    assert all(gap >= 2 for gap in gaps[before:before + 9]), gaps
+    assert stats.dropped >= sum(gap - 1 for gap in gaps) >= 9
 
 
 def test_pause_keeps_the_device_and_resume_drops_what_was_captured_before():

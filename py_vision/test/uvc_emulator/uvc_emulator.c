@@ -42,6 +42,7 @@
 #include <linux/videodev2.h>
 #include <poll.h>
 #include <pthread.h>
+#include <sched.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -123,9 +124,41 @@ struct plane_desc {
     uint32_t across, per, down;
 };
 
+/* The USB 2.0 bus the cameras of one state directory share (the file `usb_bus` there, mapped
+ * by every process): each streaming camera's isochronous reservation, in bytes per 125 us
+ * microframe, as uvcvideo reserves it at STREAMON (an alternate setting of the camera's
+ * endpoint); the host controller grants periodic transfers at most BUS_CAPACITY of the 7500
+ * bytes a microframe carries (80 %), and refuses more with ENOSPC. */
+#define BUS_SLOTS 16
+#define BUS_CAPACITY 6000
+struct bus_slot {
+    uint64_t key;            /* the camera (its bus_key), 0: free */
+    uint64_t owner;          /* the streaming handle (a dead process's reservation is void) */
+    uint32_t bytes;
+    uint32_t reserved;
+};
+struct bus_state {
+    uint32_t lock;           /* 0: a spin lock, the mapping being shared across processes */
+    uint32_t reserved;
+    struct bus_slot slots[BUS_SLOTS];
+};
+
+/* A recorded clip a compressed video format (H.264) serves: its access units, each from its
+ * start code and access unit delimiter (00 00 00 01 09) to the next one's, frame i of the
+ * sensor unit i % n_units. */
+struct clip {
+    uint8_t *data;
+    size_t len;
+    uint32_t n_units;
+    uint32_t *offset, *length;
+};
+
 struct format_desc {
     uint32_t fourcc, flags;
     char description[32];
+    char clip_path[PATH_MAX];              /* a video format's clip file ("" for the others) */
+    size_t clip_size;                      /* its length in bytes */
+    struct clip clip;                      /* loaded from it at the first frame */
     uint32_t n_planes;                     /* 0: YUYV or JPEG, made from the YUYV picture */
     struct plane_desc planes[MAX_PLANES];
     uint32_t n_frames;
@@ -161,6 +194,11 @@ struct jpeg_cache;
 struct camera {
     char dir[PATH_MAX];
     char driver[16];                       /* QUERYCAP's driver: uvcvideo unless told */
+    struct bus_state *bus;                 /* its USB bus (NULL: not on one) */
+    uint64_t bus_key;
+    uint32_t compressed_payload;           /* bytes per microframe a compressed stream asks */
+    uint32_t n_alts;                       /* the endpoint's alternate settings, ascending */
+    uint32_t alts[16];
     char card[32];
     char bus_info[32];
     char by_id[PATH_MAX];
@@ -359,6 +397,25 @@ static void load_camera(const char *dir)
             copy_text(cam->card, sizeof(cam->card), rest);
         } else if (!strcmp(line, "driver")) {
             copy_text(cam->driver, sizeof(cam->driver), rest);
+        } else if (!strcmp(line, "bus")) {
+            unsigned long long key = 0;
+            int n = 0;
+            if (sscanf(rest, "%llu %u %n", &key, &cam->compressed_payload, &n) == 2) {
+                cam->bus_key = key;
+                int fd2 = fd_open_real(rest + n, O_RDWR | O_CLOEXEC);
+                if (fd2 >= 0) {
+                    void *p = real_mmap(NULL, 4096, PROT_READ | PROT_WRITE, MAP_SHARED, fd2, 0);
+                    real_close(fd2);
+                    cam->bus = p == MAP_FAILED ? NULL : p;
+                }
+            }
+        } else if (!strcmp(line, "alts")) {
+            int n = 0, used = 0;
+            while (cam->n_alts < 16
+                   && sscanf(rest + used, "%u %n", &cam->alts[cam->n_alts], &n) == 1) {
+                cam->n_alts++;
+                used += n;
+            }
         } else if (!strcmp(line, "bus_info")) {
             copy_text(cam->bus_info, sizeof(cam->bus_info), rest);
         } else if (!strcmp(line, "by_id")) {
@@ -383,6 +440,13 @@ static void load_camera(const char *dir)
                              &pl[fmt->n_planes].per, &pl[fmt->n_planes].down, &n) == 3) {
                 fmt->n_planes++;
                 used += n;
+            }
+        } else if (!strcmp(line, "clip") && fmt) {
+            int n = 0;
+            unsigned long size = 0;
+            if (sscanf(rest, "%lu %n", &size, &n) == 1) {
+                fmt->clip_size = size;
+                copy_text(fmt->clip_path, sizeof(fmt->clip_path), rest + n);
             }
         } else if (!strcmp(line, "white") && frm) {
             copy_text(frm->white, sizeof(frm->white), rest);
@@ -1462,12 +1526,71 @@ static uint32_t render_jpeg(struct handle *h, uint8_t *out, size_t cap, uint64_t
     return (uint32_t)p;
 }
 
+/* Read a clip and find its access units (called with cam->lock held); 0 or -1. */
+static int load_clip(struct format_desc *fmt)
+{
+    struct clip *c = &fmt->clip;
+    uint8_t *data = fmt->clip_size >= 5 ? malloc(fmt->clip_size) : NULL;
+    size_t got = 0;
+    if (!data || read_file(fmt->clip_path, data, fmt->clip_size, &got) != 0
+            || got != fmt->clip_size) {
+        free(data);
+        return -1;
+    }
+    uint32_t n_units = 0;
+    for (size_t i = 0; i + 5 <= got; i++)
+        if (!memcmp(data + i, "\0\0\0\1\x09", 5))
+            n_units++;
+    if (!n_units) {
+        free(data);
+        return -1;
+    }
+    c->offset = calloc(n_units, sizeof(uint32_t));
+    c->length = calloc(n_units, sizeof(uint32_t));
+    if (!c->offset || !c->length) {
+        free(c->offset);
+        free(c->length);
+        free(data);
+        return -1;
+    }
+    uint32_t k = 0;
+    for (size_t i = 0; i + 5 <= got; i++)
+        if (!memcmp(data + i, "\0\0\0\1\x09", 5))
+            c->offset[k++] = (uint32_t)i;
+    for (k = 0; k < n_units; k++)
+        c->length[k] = (k + 1 < n_units ? c->offset[k + 1] : (uint32_t)got) - c->offset[k];
+    c->data = data;
+    c->len = got;
+    c->n_units = n_units;
+    return 0;
+}
+
+/* A video format's frame: the clip's access unit for the sensor's frame, as it is. */
+static uint32_t render_clip(struct handle *h, uint8_t *out, size_t cap, uint64_t index)
+{
+    struct camera *cam = h->cam;
+    struct format_desc *fmt = &cam->formats[h->fmt];
+    pthread_mutex_lock(&cam->lock);
+    int ok = fmt->clip.n_units || load_clip(fmt) == 0;
+    pthread_mutex_unlock(&cam->lock);
+    if (!ok)
+        return 0;
+    uint32_t unit = (uint32_t)(index % fmt->clip.n_units);
+    uint32_t length = fmt->clip.length[unit];
+    if (length > cap)
+        return 0;
+    memcpy(out, fmt->clip.data + fmt->clip.offset[unit], length);
+    return length;
+}
+
 static uint32_t render_frame(struct handle *h, uint32_t b, uint64_t index)
 {
     struct camera *cam = h->cam;
     const struct format_desc *fmt = &cam->formats[h->fmt];
     const struct frame_desc *fd = &fmt->frames[h->frame];
     uint8_t *out = h->mem + (size_t)b * h->stride;
+    if (fmt->clip_path[0])
+        return render_clip(h, out, fd->sizeimage, index);
     if (fmt->fourcc == V4L2_PIX_FMT_MJPEG && cam->have_tables)
         return render_jpeg(h, out, fd->sizeimage, index);
     if (fmt->n_planes) {
@@ -1568,8 +1691,10 @@ static void *producer(void *arg)
         __atomic_fetch_add(&s->render_ns, (uint64_t)((c1.tv_sec - c0.tv_sec) * 1000000000LL
                                                      + (c1.tv_nsec - c0.tv_nsec)),
                            __ATOMIC_ACQ_REL);
-        int jpeg = !error && h->cam->served && h->cam->have_tables
-            && h->cam->formats[h->fmt].fourcc == V4L2_PIX_FMT_MJPEG;
+        /* A JPEG's or a clip's bytes vary frame to frame: the served ring records them. */
+        const struct format_desc *made = &h->cam->formats[h->fmt];
+        int jpeg = !error && h->cam->served && (made->clip_path[0] || (h->cam->have_tables
+            && made->fourcc == V4L2_PIX_FMT_MJPEG));
         uint32_t crc = jpeg ? crc32_of(h->mem + (size_t)b * h->stride, used) : 0;
         struct timeval tv = {(time_t)due, (suseconds_t)((due - (time_t)due) * 1e6)};
         pthread_mutex_lock(&h->lock);
@@ -1592,6 +1717,77 @@ static void *producer(void *arg)
     }
 }
 
+static void bus_lock(struct bus_state *bus)
+{
+    while (__atomic_exchange_n(&bus->lock, 1, __ATOMIC_ACQUIRE))
+        sched_yield();
+}
+
+static void bus_unlock(struct bus_state *bus)
+{
+    __atomic_store_n(&bus->lock, 0, __ATOMIC_RELEASE);
+}
+
+/* The bytes per microframe uvcvideo reserves for the current format: a compressed one what
+ * the camera asks (dwMaxPayloadTransferSize), a raw one its frames' bytes at its rate, each
+ * rounded up to an alternate setting of the endpoint. */
+static uint32_t bus_need(struct handle *h)
+{
+    struct camera *cam = h->cam;
+    const struct format_desc *fmt = &cam->formats[h->fmt];
+    double need = cam->compressed_payload;
+    if (!(fmt->flags & V4L2_FMT_FLAG_COMPRESSED))
+        need = (double)fmt->frames[h->frame].sizeimage * h->interval.denominator
+               / h->interval.numerator / 8000.0;
+    for (uint32_t i = 0; i < cam->n_alts; i++)
+        if (cam->alts[i] >= need)
+            return cam->alts[i];
+    return cam->n_alts ? cam->alts[cam->n_alts - 1] : (uint32_t)need;
+}
+
+/* Reserve the stream's bandwidth on the camera's bus: 0, or ENOSPC when others hold it. */
+static int bus_reserve(struct handle *h)
+{
+    struct camera *cam = h->cam;
+    struct bus_state *bus = cam->bus;
+    if (!bus || !cam->bus_key)
+        return 0;
+    uint32_t need = bus_need(h), taken = 0;
+    bus_lock(bus);
+    struct bus_slot *own = NULL, *free_slot = NULL;
+    for (int i = 0; i < BUS_SLOTS; i++) {
+        struct bus_slot *s = &bus->slots[i];
+        if (s->key == cam->bus_key)
+            own = s;
+        else if (s->key && owner_alive(s->owner))
+            taken += s->bytes;
+        else if (!free_slot)
+            free_slot = s;
+    }
+    struct bus_slot *slot = own ? own : free_slot;
+    if (!slot || taken + need > BUS_CAPACITY) {
+        bus_unlock(bus);
+        return ENOSPC;
+    }
+    slot->key = cam->bus_key;
+    slot->owner = h->owner_id;
+    slot->bytes = need;
+    bus_unlock(bus);
+    return 0;
+}
+
+static void bus_release(struct handle *h)
+{
+    struct bus_state *bus = h->cam->bus;
+    if (!bus || !h->cam->bus_key)
+        return;
+    bus_lock(bus);
+    for (int i = 0; i < BUS_SLOTS; i++)
+        if (bus->slots[i].key == h->cam->bus_key && bus->slots[i].owner == h->owner_id)
+            memset(&bus->slots[i], 0, sizeof(bus->slots[i]));
+    bus_unlock(bus);
+}
+
 /* Called with h->lock held; returns with it held. */
 static void stop_streaming(struct handle *h)
 {
@@ -1606,6 +1802,7 @@ static void stop_streaming(struct handle *h)
     }
     h->streaming = 0;
     h->stop = 0;
+    bus_release(h);
     h->n_queued = h->n_done = 0;
     for (uint32_t i = 0; i < h->n_buffers; i++)
         h->buffers[i].state = BUF_IDLE;
@@ -2259,6 +2456,9 @@ static int do_ioctl(struct handle *h, unsigned int cmd, void *arg)
             return err;
         if (h->streaming)
             return 0;
+        err = bus_reserve(h);
+        if (err)
+            return err;
         h->streaming = 1;
         h->stop = 0;
         h->sequence = 0;
@@ -2266,6 +2466,7 @@ static int do_ioctl(struct handle *h, unsigned int cmd, void *arg)
         h->scratch = NULL;
         if (pthread_create(&h->thread, NULL, producer, h) != 0) {
             h->streaming = 0;
+            bus_release(h);
             return ENOMEM;
         }
         sync_event(h);
