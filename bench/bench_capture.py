@@ -44,21 +44,15 @@ writes bench/results/capture.json. ``--runs N`` N runs of each.
 import argparse
 import json
 import os
-from pathlib import Path
 import shutil
 import statistics
 import subprocess
 import sys
 import tempfile
 
-REPO = Path(__file__).resolve().parent.parent
-TESTS = REPO / 'py_vision' / 'test'
-sys.path.insert(0, str(TESTS))
-sys.path.insert(0, str(REPO / 'py_vision'))
-
-from bench_common import save_results  # noqa: E402,I100
-from emulated_camera import EmulatedCamera  # noqa: E402
-import ros_harness  # noqa: E402
+from bench_common import BENCH, save_results, TESTS
+from emulated_camera import EmulatedCamera
+import ros_harness
 
 # width, height, FourCC, rate (the highest the camera offers at that size)
 SIZES = [(640, 480, 'YUYV', 30.0), (1280, 720, 'YUYV', 10.0), (1280, 720, 'MJPG', 30.0)]
@@ -71,7 +65,7 @@ SECONDS = 4.0        # of measured reading at 30 fps; more frames' worth at lowe
 MIN_FRAMES = 40
 RUNS = 5
 
-WORKER = Path(__file__).with_name('capture_worker.py')
+WORKER = BENCH / 'capture_worker.py'
 
 
 def run(camera, env, width, height, fourcc, fps, way):

@@ -13,10 +13,16 @@
 # limitations under the License.
 
 """
-What the benchmark's helper processes share: stop on a signal, write results.
+What the benchmarks share beyond the tests' harness, which they run on.
 
-Each helper (bare publisher and subscriber, instrumented py_vision nodes) records one event per
-frame in memory and writes them as JSON to the file named by its caller when it stops.
+Importing this module puts the tests' directory and the installed py_vision (what the nodes
+run) on sys.path: `ros_harness` (the installed package's environment, ROS domain reservations,
+node processes, two hosts) is the benchmarks' harness too. Here: what a benchmark measures a
+process by (/proc CPU ticks), its helper processes (`start_helper`: a command whose results
+file is '{out}'), and what the helpers themselves share: stop on a signal, announce the first
+frame, write results. Each helper (bare
+publisher and subscriber, instrumented py_vision nodes) records one event per frame in memory
+and writes them as JSON to the file named by its caller when it stops.
 """
 
 import json
@@ -24,13 +30,66 @@ import os
 from pathlib import Path
 import platform
 import signal
+import sys
 import threading
 import time
 
-RESULTS = Path(__file__).resolve().parent / 'results'
-
+BENCH = Path(__file__).resolve().parent
+REPO = BENCH.parent
+RESULTS = BENCH / 'results'
+TESTS = REPO / 'py_vision' / 'test'
+if str(TESTS) not in sys.path:
+    sys.path.insert(0, str(TESTS))
+import ros_harness  # noqa: E402 (found through the path set just above)
+if str(ros_harness.SITE_PACKAGES) not in sys.path:
+    sys.path.insert(0, str(ros_harness.SITE_PACKAGES))
 
 FIRST_FRAME_MARK = 'BENCH first frame'
+CLK_TCK = os.sysconf('SC_CLK_TCK')
+
+
+def cpu_ticks(pid):
+    """Return utime + stime of a process in clock ticks, or None when it is gone."""
+    try:
+        with open('/proc/%d/stat' % pid) as stream:
+            fields = stream.read().rsplit(')', 1)[1].split()
+    except OSError:
+        return None
+    return int(fields[11]) + int(fields[12])
+
+
+def machine_ticks():
+    """Return (busy, total) jiffies of the whole machine."""
+    with open('/proc/stat') as stream:
+        values = [int(v) for v in stream.readline().split()[1:]]
+    idle = values[3] + values[4]
+    total = sum(values[:8])
+    return total - idle, total
+
+
+def start_helper(name, cmd, env, workdir, wrap=None):
+    """
+    Start a helper process: '{out}' in cmd is its results file, workdir/<name>.json.
+
+    Its output goes to workdir/<name>.log (`output()`); wrap, if given, turns the command
+    into another (TwoHosts.command: run on a host). Stop it with `end()`, read what it wrote
+    with `read_results(proc)`.
+    """
+    out = Path(workdir) / ('%s.json' % name)
+    cmd = [part.replace('{out}', str(out)) for part in cmd]
+    if wrap is not None:
+        cmd = wrap(cmd)
+    proc = ros_harness.NodeProcess(cmd[0], cmd[1:], env, name=name, log_dir=workdir)
+    proc.results_path = out
+    return proc
+
+
+def read_results(proc):
+    """Return what a helper wrote to its results file, or None."""
+    try:
+        return json.loads(proc.results_path.read_text())
+    except (OSError, ValueError):
+        return None
 
 
 class StopFlag:
@@ -91,10 +150,8 @@ def local_node_env():
     Return the environment of the node processes a benchmark starts, discovery on this host.
 
     The node processes get the installed package; this process joins them the same way, on
-    the nodes' transport. For benchmarks that have put the tests' directory (ros_harness) and
-    the installed py_vision on sys.path.
+    the nodes' transport.
     """
-    import ros_harness
     from py_vision import dds
     env = ros_harness.installed_env()
     env.update(ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', PYTHONUNBUFFERED='1',

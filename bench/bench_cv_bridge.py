@@ -20,20 +20,14 @@ Run from the repository root: ``.venv/bin/python bench/bench_cv_bridge.py``. Pri
 table of medians and writes bench/results/cv_bridge.json.
 """
 
-from pathlib import Path
 import statistics
-import sys
 import time
 
+from bench_common import save_results
 import numpy as np
-
-REPO = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(REPO / 'py_vision'))
-
-from bench_common import save_results  # noqa: E402,I100
-from py_vision.cv_bridge import CvBridge  # noqa: E402
-from sensor_msgs.msg import Image  # noqa: E402
-from std_msgs.msg import Header  # noqa: E402
+from py_vision.cv_bridge import CvBridge
+from sensor_msgs.msg import Image
+from std_msgs.msg import Header
 
 SIZES = [(640, 480), (1280, 720), (1920, 1080)]
 REPEATS = 21

@@ -30,22 +30,17 @@ Prints a Markdown table and writes bench/results/diagnostics.json.
 
 import argparse
 import os
-from pathlib import Path
 import signal
 import statistics
 import sys
 import time
 
-BENCH = Path(__file__).resolve().parent
-REPO = BENCH.parent
-sys.path.insert(0, str(REPO / 'py_vision' / 'test'))
-import ros_harness  # noqa: E402,I100 (found through the path set just above)
-sys.path.insert(0, str(ros_harness.SITE_PACKAGES))  # the installed py_vision, as the nodes run
+from bench_common import CLK_TCK, cpu_ticks, local_node_env, save_results
+import ros_harness
 
 CAMERA = {'video_device': 'synthetic', 'image_width': 640, 'image_height': 480,
           'framerate': 30.0}
 SETTLE_S = 3.0
-TICKS_PER_S = os.sysconf('SC_CLK_TCK')
 
 
 def run_node(diagnostics):
@@ -62,13 +57,6 @@ def run_node(diagnostics):
 
     node_class = USBImagePublisher if diagnostics == 'on' else WithoutDiagnostics
     sys.exit(node_main.run(node_class, args=sys.argv[:1] + sys.argv[3:]))
-
-
-def cpu_ticks(pid):
-    """Return utime + stime of a process in clock ticks."""
-    with open('/proc/%d/stat' % pid) as stream:
-        fields = stream.read().rsplit(')', 1)[1].split()
-    return int(fields[11]) + int(fields[12])
 
 
 def one_report(calls):
@@ -135,7 +123,7 @@ def node_cpu(diagnostics, duration, env):
         raise SystemExit('the node ended with %s:\n%s' % (status, log))
     if (diagnostics == 'on') != (received > 0):
         raise SystemExit('diagnostics %s, but %d reports received' % (diagnostics, received))
-    return (after - before) / TICKS_PER_S / (end - start)
+    return (after - before) / CLK_TCK / (end - start)
 
 
 def main():
@@ -148,7 +136,6 @@ def main():
     parser.add_argument('--calls', type=int, default=2000, help='reports timed in process')
     options = parser.parse_args()
 
-    from bench_common import local_node_env, save_results
     env = local_node_env()  # the monitor joins the nodes on their transport
 
     report_s = one_report(options.calls)

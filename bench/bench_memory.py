@@ -35,15 +35,14 @@ import argparse
 from pathlib import Path
 import re
 import shutil
+import statistics
 import sys
 import tempfile
 import time
 
-from bench_common import FIRST_FRAME_MARK, save_results
-from bench_pipeline import DomainId, INSTALL, installed_env, Proc, wait_for
-
-BENCH = Path(__file__).resolve().parent
-EXECUTABLES = INSTALL / 'py_vision' / 'lib' / 'py_vision'
+from bench_common import BENCH, FIRST_FRAME_MARK, read_results, save_results, start_helper
+import ros_harness
+from ros_harness import DomainId, EXECUTABLES
 SIZES = ((640, 480), (1920, 1080))
 CAMERA_DEFAULT_SIZE = (640, 480)  # usbcam_publisher's image_width, image_height
 ROLES = ('publisher', 'processor', 'subscriber')
@@ -109,7 +108,7 @@ def run_pipeline(kind, env, width, height, fps, settle, window, log=print):
     try:
         # The last node first, so that it is there when the first frames arrive.
         for role, cmd in reversed(commands(kind, width, height, fps)):
-            procs.insert(0, (role, Proc('%s_%s' % (kind, role), cmd, env, workdir)))
+            procs.insert(0, (role, start_helper('%s_%s' % (kind, role), cmd, env, workdir)))
         subscriber = procs[-1][1]
 
         def flowing():
@@ -117,7 +116,10 @@ def run_pipeline(kind, env, width, height, fps, settle, window, log=print):
                 return 'ended'
             out = subscriber.output()
             return FIRST_FRAME_MARK in out or bool(frames_received(kind, subscriber))
-        state = wait_for(flowing, 60, interval=0.2)
+        try:
+            state = ros_harness.wait_until(flowing, 60, 0.2, 'frames')
+        except AssertionError:
+            state = None
         if state is not True:
             result['error'] = ('a process ended early' if state == 'ended'
                                else 'no frame reached the last node within 60 s')
@@ -141,23 +143,17 @@ def run_pipeline(kind, env, width, height, fps, settle, window, log=print):
             result['delivered_fps'] = round((last - first) / window, 1)
     finally:
         for role, proc in procs:
-            proc.stop()
+            proc.end(timeout=15.0)
         if 'error' in result:
             for role, proc in procs:
                 log('--- %s %s:\n%s' % (kind, role, proc.output()[-1500:]))
         bare_sub = dict(procs).get('subscriber') if kind == 'bare' else None
-        if bare_sub is not None and bare_sub.results() and 'nodes' in result:
-            events = bare_sub.results()['received']
+        if bare_sub is not None and read_results(bare_sub) and 'nodes' in result:
+            events = read_results(bare_sub)['received']
             span = events[-1][0] - events[0][0] if len(events) > 1 else 0
             result['delivered_fps'] = round((len(events) - 1) / span, 1) if span else 0.0
         shutil.rmtree(workdir, ignore_errors=True)
     return result
-
-
-def median(values):
-    values = sorted(values)
-    mid = len(values) // 2
-    return values[mid] if len(values) % 2 else (values[mid - 1] + values[mid]) / 2
 
 
 def combine(runs):
@@ -165,7 +161,7 @@ def combine(runs):
     ok = [r for r in runs if 'nodes' in r]
     if not ok:
         return None
-    return {role: {field: median([r['nodes'][role][field] for r in ok])
+    return {role: {field: statistics.median([r['nodes'][role][field] for r in ok])
                    for field in ok[0]['nodes'][role]} for role in ROLES}
 
 
@@ -221,7 +217,7 @@ def main(argv=None):
                         help='seconds of frames before sampling (3)')
     parser.add_argument('--window', type=float, default=6.0, help='sampling window, s (6)')
     args = parser.parse_args(argv)
-    base = installed_env()
+    base = ros_harness.plain_env()
     domain = DomainId()
     base.update(ROS_DOMAIN_ID=str(domain.value), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
                 PYTHONPATH=str(BENCH) + ':' + base.get('PYTHONPATH', ''))

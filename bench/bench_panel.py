@@ -31,19 +31,14 @@ import argparse
 import http.client
 import json
 import os
-from pathlib import Path
 import shutil
 import statistics
-import sys
 import tempfile
 import threading
 import time
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / 'py_vision' / 'test'))
-
-from bench_common import save_results  # noqa: E402
-import ros_harness  # noqa: E402,I100 (the test helpers that start the installed nodes)
+from bench_common import save_results
+import ros_harness
 
 
 def request(port, method, path, body=None):

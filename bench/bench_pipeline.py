@@ -37,141 +37,40 @@ Per case: start the subscriber, then the publisher; wait for the first frame (di
 measured), settle for a second, then measure a fixed window. Frames are counted by frame index:
 every frame the publisher published in the window is delivered or lost. Latency is capture (or
 publish) stamp to subscriber callback. CPU% is utime+stime from /proc over the window.
-Writes bench/results/pipeline.json and pipeline.png and prints a Markdown table.
+Writes bench/results/pipeline.json and pipeline.png and prints a Markdown table. Processes,
+environments, domains and the two hosts are the tests' harness (ros_harness, bench_common).
 """
 
 import argparse
+import functools
 import json
 import os
 from pathlib import Path
 import re
 import shutil
 import signal
+import statistics
 import subprocess
 import sys
 import tempfile
 import time
 
-BENCH = Path(__file__).resolve().parent
-REPO = BENCH.parent
-INSTALL = Path(os.environ.get('PY_VISION_INSTALL', REPO / 'install')).resolve()
-RESULTS = BENCH / 'results'
-PROFILE = INSTALL / 'py_vision' / 'share' / 'py_vision' / 'config' / 'fastdds_image_profile.xml'
-FIRST_FRAME_MARK = 'BENCH first frame'
-PROFILE_VARIABLES = ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE')
+from bench_common import (BENCH, CLK_TCK, cpu_ticks, FIRST_FRAME_MARK, machine_ticks,
+                          read_results, RESULTS, start_helper)
+from py_vision.stats import percentile
+import ros_harness
+from ros_harness import DomainId
+
+PROFILE = ros_harness.SHARE / 'config' / 'fastdds_image_profile.xml'
 
 SIZES = ((640, 480), (1280, 720), (1920, 1080))
 HIGH_RATE = {(640, 480): 200.0, (1280, 720): 60.0, (1920, 1080): 60.0}
 RELIABILITIES = ('best_effort', 'reliable')
 NETNS_FPS = 15.0
+# The two "hosts" (network namespaces joined by a veth pair, each process with a /dev/shm of
+# its own, so that shared memory cannot carry frames between them).
+HOSTS = ('publisher', 'subscriber')
 
-# The two "hosts": network namespaces joined by a veth pair on a private /24.
-NETNS = ('pyvbench_pub', 'pyvbench_sub')
-VETH = ('pyvb_pub', 'pyvb_sub')
-NETNS_ADDR = ('10.77.0.1', '10.77.0.2')
-# Each namespace side also gets a private /dev/shm, so that shared memory cannot carry frames
-# between the "hosts" even if Fast DDS tried.
-PRIVATE_SHM = 'mount -t tmpfs -o size=2g pyvbench_shm /dev/shm && exec "$@"'
-
-CLK_TCK = os.sysconf('SC_CLK_TCK')
-
-# The tests' harness reserves ROS domain ids through lock files: sharing it means a bench run
-# and a test run on one machine never share a domain.
-sys.path.insert(0, str(REPO / 'py_vision' / 'test'))
-from ros_harness import DomainId  # noqa: E402,I100 (found through the path set just above)
-
-
-# ----------------------------------------------------------------------------- environment
-
-def installed_env():
-    """Return os.environ plus `source install/setup.bash`, without any Fast DDS profile."""
-    setup = INSTALL / 'setup.bash'
-    if not setup.is_file():
-        sys.exit('%s is missing: build first with scripts/setup.sh' % setup)
-    out = subprocess.run(['bash', '-c', 'source "$0" && env -0', str(setup)],
-                         check=True, capture_output=True).stdout
-    env = dict(item.split('=', 1) for item in out.decode().split('\0') if '=' in item)
-    for name in PROFILE_VARIABLES + ('RMW_IMPLEMENTATION', 'ROS_STATIC_PEERS',
-                                     'ROS_LOCALHOST_ONLY', 'ROS_AUTOMATIC_DISCOVERY_RANGE'):
-        env.pop(name, None)
-    env['PYTHONUNBUFFERED'] = '1'
-    return env
-
-
-# ----------------------------------------------------------------------------- processes
-
-def cpu_ticks(pid):
-    """Return utime + stime of a process in clock ticks, or None when it is gone."""
-    try:
-        with open('/proc/%d/stat' % pid) as stream:
-            fields = stream.read().rsplit(')', 1)[1].split()
-    except OSError:
-        return None
-    return int(fields[11]) + int(fields[12])
-
-
-def machine_ticks():
-    """Return (busy, total) jiffies of the whole machine."""
-    with open('/proc/stat') as stream:
-        values = [int(v) for v in stream.readline().split()[1:]]
-    idle = values[3] + values[4]
-    total = sum(values[:8])
-    return total - idle, total
-
-
-class Proc:
-    """One helper process; output to a log file, results to a JSON file."""
-
-    def __init__(self, name, cmd, env, workdir, netns=None):
-        self.name = name
-        self.out = str(workdir / ('%s.json' % name))
-        self.log_path = workdir / ('%s.log' % name)
-        cmd = [c.replace('{out}', self.out) for c in cmd]
-        if netns is not None:
-            cmd = ['ip', 'netns', 'exec', netns, 'unshare', '--mount', '--propagation',
-                   'private', 'sh', '-c', PRIVATE_SHM, 'sh'] + cmd
-        self.cmd = cmd
-        self._log = open(self.log_path, 'w')
-        # ip netns exec, unshare and sh all exec, so the pid is the Python process itself.
-        self.proc = subprocess.Popen(cmd, env=env, cwd=str(workdir), stdout=self._log,
-                                     stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                     start_new_session=True)
-        self.pid = self.proc.pid
-
-    def output(self):
-        return self.log_path.read_text(errors='replace')
-
-    def stop(self, timeout=15.0):
-        """SIGINT, wait; SIGKILL if it does not end. Return the exit status."""
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(timeout)
-            except subprocess.TimeoutExpired:
-                os.killpg(self.pid, signal.SIGKILL)
-                self.proc.wait()
-        self._log.close()
-        return self.proc.returncode
-
-    def results(self):
-        try:
-            with open(self.out) as stream:
-                return json.load(stream)
-        except (OSError, ValueError):
-            return None
-
-
-def wait_for(predicate, timeout, interval=0.05):
-    """Poll predicate until it is truthy or timeout seconds pass; return its last value."""
-    deadline = time.monotonic() + timeout
-    while True:
-        value = predicate()
-        if value or time.monotonic() > deadline:
-            return value
-        time.sleep(interval)
-
-
-# ----------------------------------------------------------------------------- network namespaces
 
 def check_profile(env):
     """Return Fast DDS' complaints about the installed profile (it names unknown elements)."""
@@ -188,59 +87,19 @@ def check_profile(env):
     return problems
 
 
-def netns_unavailable():
-    """Return why the two-host cases cannot run here, or None."""
-    if os.geteuid() != 0:
-        return 'needs root (ip netns, veth, mount)'
-    if shutil.which('ip') is None or shutil.which('unshare') is None:
-        return 'needs the ip and unshare commands'
-    return None
-
-
-def _ip(*args, check=True):
-    return subprocess.run(('ip',) + args, check=check, capture_output=True, text=True)
-
-
-def netns_teardown():
-    for ns in NETNS:
-        _ip('netns', 'del', ns, check=False)
-
-
-def netns_setup():
-    """Create the two namespaces and the veth pair; return an error string or None."""
-    netns_teardown()
-    try:
-        for ns in NETNS:
-            _ip('netns', 'add', ns)
-        _ip('link', 'add', VETH[0], 'type', 'veth', 'peer', 'name', VETH[1])
-        for ns, dev, addr in zip(NETNS, VETH, NETNS_ADDR):
-            _ip('link', 'set', dev, 'netns', ns)
-            _ip('-n', ns, 'addr', 'add', addr + '/24', 'dev', dev)
-            _ip('-n', ns, 'link', 'set', 'lo', 'up')
-            _ip('-n', ns, 'link', 'set', dev, 'up')
-            # Discovery multicast goes out of the veth (there is no default route).
-            _ip('-n', ns, 'route', 'add', '224.0.0.0/4', 'dev', dev)
-    except subprocess.CalledProcessError as error:
-        netns_teardown()
-        return 'cannot create network namespaces: %s' % (error.stderr or error).strip()
-    return None
-
-
-def receive_buffer_errors():
-    """UDP datagrams the subscriber's namespace dropped for a full socket buffer, so far."""
-    out = subprocess.run(['ip', 'netns', 'exec', NETNS[1], 'cat', '/proc/net/snmp'],
-                         capture_output=True, text=True).stdout
+def receive_buffer_errors(hosts):
+    """UDP datagrams the subscriber's host dropped for a full socket buffer, so far."""
+    out = hosts.read(HOSTS[1], ['cat', '/proc/net/snmp'])
     rows = [line.split() for line in out.splitlines() if line.startswith('Udp:')]
     if len(rows) < 2:
         return None
     return int(dict(zip(rows[0][1:], rows[1][1:])).get('RcvbufErrors', 0))
 
 
-def veth_tx_bytes():
+def veth_tx_bytes(hosts):
     """Bytes the publisher's veth end has sent so far."""
-    out = subprocess.run(['ip', 'netns', 'exec', NETNS[0], 'cat',
-                          '/sys/class/net/%s/statistics/tx_bytes' % VETH[0]],
-                         capture_output=True, text=True).stdout
+    out = hosts.read(HOSTS[0], ['cat', '/sys/class/net/%s/statistics/tx_bytes'
+                                % hosts.device[HOSTS[0]]])
     return int(out) if out.strip().isdigit() else None
 
 
@@ -370,51 +229,55 @@ def case_env(base, case, domain, workdir):
     return env
 
 
-def run_case(case, base_env, domain, duration, settle, python, log=print):
-    """Run one case; return its measurements (or an 'error')."""
+def run_case(case, base_env, domain, duration, settle, python, hosts=None, log=print):
+    """Run one case (a netns one on hosts); return its measurements (or an 'error')."""
     workdir = Path(tempfile.mkdtemp(prefix='pyv_bench_'))
     env = case_env(base_env, case, domain, workdir)
     pub_cmd, sub_cmd = commands(case, python)
-    pub_ns = NETNS[0] if case['netns'] else None
-    sub_ns = NETNS[1] if case['netns'] else None
+    on_hosts = hosts if case['netns'] else None
     result = dict(case)
-    sub = Proc('subscriber', sub_cmd, env, workdir, sub_ns)
-    pub = Proc('publisher', pub_cmd, publisher_env(env, case, workdir), workdir, pub_ns)
+    sub = start_helper('subscriber', sub_cmd, env, workdir,
+                       on_hosts and functools.partial(hosts.command, HOSTS[1]))
+    pub = start_helper('publisher', pub_cmd, publisher_env(env, case, workdir), workdir,
+                       on_hosts and functools.partial(hosts.command, HOSTS[0]))
     try:
-        if not wait_for(lambda: FIRST_FRAME_MARK in sub.output()
-                        or sub.proc.poll() is not None or pub.proc.poll() is not None, 40):
+        try:
+            ros_harness.wait_until(lambda: FIRST_FRAME_MARK in sub.output()
+                                   or sub.proc.poll() is not None
+                                   or pub.proc.poll() is not None, 40, 0.05, 'a frame')
+            if FIRST_FRAME_MARK not in sub.output():
+                result['error'] = 'a process ended early'
+        except AssertionError:
             result['error'] = 'no frame reached the subscriber within 40 s'
-        elif FIRST_FRAME_MARK not in sub.output():
-            result['error'] = 'a process ended early'
         if 'error' not in result:
             time.sleep(settle)
             pids = (pub.pid, sub.pid)
             t0 = time.monotonic()
             cpu0 = [cpu_ticks(pid) for pid in pids]
             m0 = machine_ticks()
-            tx0 = veth_tx_bytes() if case['netns'] else None
-            drops0 = receive_buffer_errors() if case['netns'] else None
+            tx0 = veth_tx_bytes(on_hosts) if on_hosts else None
+            drops0 = receive_buffer_errors(on_hosts) if on_hosts else None
             time.sleep(duration)  # the measurement window itself
             t1 = time.monotonic()
             cpu1 = [cpu_ticks(pid) for pid in pids]
             m1 = machine_ticks()
-            tx1 = veth_tx_bytes() if case['netns'] else None
-            drops1 = receive_buffer_errors() if case['netns'] else None
+            tx1 = veth_tx_bytes(on_hosts) if on_hosts else None
+            drops1 = receive_buffer_errors(on_hosts) if on_hosts else None
             result.update(window=(t0, t1), cpu0=cpu0, cpu1=cpu1, machine=(m0, m1),
                           receive_buffer_drops=(drops1 - drops0) if drops0 is not None
                           and drops1 is not None else None,
                           veth_bytes=(tx1 - tx0) if tx0 is not None and tx1 is not None
                           else None)
     finally:
-        pub_status = pub.stop()
+        pub.end(timeout=15.0)
         # Frames still in flight when the publisher stopped may arrive a little later.
         time.sleep(0.5)
-        sub_status = sub.stop()
-    published, received = pub.results(), sub.results()
+        sub.end(timeout=15.0)
+    published, received = read_results(pub), read_results(sub)
     if 'error' not in result and (published is None or received is None):
         result['error'] = 'no results from the %s (exit %s)' % (
             'publisher' if published is None else 'subscriber',
-            pub_status if published is None else sub_status)
+            pub.proc.returncode if published is None else sub.proc.returncode)
     if 'error' in result:
         result['log_publisher'] = pub.output()[-2000:]
         result['log_subscriber'] = sub.output()[-2000:]
@@ -425,12 +288,6 @@ def run_case(case, base_env, domain, duration, settle, python, log=print):
                                          if 'received' in line][-1:]
     shutil.rmtree(workdir, ignore_errors=True)
     return result
-
-
-def percentile(sorted_values, fraction):
-    """Nearest-rank percentile of a sorted, non-empty list."""
-    rank = min(len(sorted_values) - 1, max(0, int(round(fraction * len(sorted_values))) - 1))
-    return sorted_values[rank]
 
 
 def analyse(result, published, received):
@@ -479,14 +336,6 @@ NUMERIC = ('published_fps', 'delivered_fps', 'delivered_pct', 'lost', 'p50_ms', 
            'pub_cpu_pct', 'sub_cpu_pct', 'machine_busy_pct', 'receive_buffer_drops')
 
 
-def median(values):
-    values = sorted(v for v in values if v is not None)
-    if not values:
-        return None
-    mid = len(values) // 2
-    return values[mid] if len(values) % 2 else (values[mid - 1] + values[mid]) / 2
-
-
 def combine(runs):
     """Median of each number over the repeats of one case; latencies pooled."""
     ok = [r for r in runs if 'error' not in r]
@@ -494,7 +343,8 @@ def combine(runs):
         return dict(runs[-1], repeats=len(runs))
     out = dict(ok[0])
     for key in NUMERIC:
-        value = median([r.get(key) for r in ok])
+        values = [r.get(key) for r in ok if r.get(key) is not None]
+        value = statistics.median(values) if values else None
         out[key] = round(value, 2) if isinstance(value, float) else value
     out['latency_ms'] = sorted(v for r in ok for v in r['latency_ms'])
     out['repeats'] = len(ok)
@@ -611,7 +461,7 @@ def main(argv=None):
         parser.error('no case matches %s' % ' '.join(args.cases))
     if not PROFILE.is_file():
         sys.exit('%s is missing: build first with scripts/setup.sh' % PROFILE)
-    base_env = installed_env()
+    base_env = ros_harness.plain_env()
     problems = check_profile(base_env)
     if problems:
         sys.exit('Fast DDS rejects %s:\n%s' % (PROFILE, '\n'.join(problems)))
@@ -620,10 +470,11 @@ def main(argv=None):
     out_dir.mkdir(parents=True, exist_ok=True)
 
     skipped = {}
-    netns_reason = netns_unavailable() if any(c['netns'] for c in cases) else None
+    netns_reason = ros_harness.two_hosts_unavailable() if any(
+        c['netns'] for c in cases) else None
     domain = DomainId()
     results = []
-    netns_ready = False
+    hosts = None
     previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
 
     def interrupted(signum, frame):
@@ -633,16 +484,18 @@ def main(argv=None):
     started = time.monotonic()
     try:
         for number, case in enumerate(cases, 1):
-            if case['netns']:
-                if netns_reason is None and not netns_ready:
-                    netns_reason = netns_setup()
-                    netns_ready = netns_reason is None
-                if netns_reason is not None:
-                    skipped[case['name']] = netns_reason
-                    continue
+            if case['netns'] and netns_reason is None and hosts is None:
+                try:
+                    hosts = ros_harness.TwoHosts(HOSTS, tag=domain.value)
+                except RuntimeError as error:
+                    netns_reason = str(error)
+            if case['netns'] and netns_reason is not None:
+                skipped[case['name']] = netns_reason
+                continue
             runs = []
             for _ in range(max(1, args.repeat)):
-                runs.append(run_case(case, base_env, domain.value, duration, 1.0, python))
+                runs.append(run_case(case, base_env, domain.value, duration, 1.0, python,
+                                     hosts))
             result = combine(runs)
             results.append(result)
             print('[%2d/%d %4.0fs] %-42s delivered %6s%%  p50 %6s ms  pub CPU %5s%%' % (
@@ -652,8 +505,8 @@ def main(argv=None):
     except KeyboardInterrupt:
         print('interrupted: reporting the cases done so far', file=sys.stderr)
     finally:
-        if netns_ready:
-            netns_teardown()
+        if hosts is not None:
+            hosts.close()
         domain.release()
         for sig, handler in previous.items():
             signal.signal(sig, handler)

@@ -33,17 +33,13 @@ Prints a Markdown table and writes bench/results/processing.json.
 
 import argparse
 import os
-from pathlib import Path
 import signal
 import sys
 import threading
 import time
 
-BENCH = Path(__file__).resolve().parent
-REPO = BENCH.parent
-sys.path.insert(0, str(REPO / 'py_vision' / 'test'))
-import ros_harness  # noqa: E402,I100 (found through the path set just above)
-sys.path.insert(0, str(ros_harness.SITE_PACKAGES))  # the installed py_vision, as the nodes run
+from bench_common import local_node_env, save_results, StopFlag
+import ros_harness
 
 FPS = 30.0
 WIDTH, HEIGHT = 640, 480
@@ -60,8 +56,8 @@ def tutorial_node(work_ms):
     from py_vision.cv_bridge_test import CIRCLE_BGR, CIRCLE_CENTER, CIRCLE_RADIUS, \
         simulated_work
     import rclpy
-    from rclpy.executors import ExternalShutdownException
     from rclpy.node import Node
+    from rclpy.signals import SignalHandlerOptions
     from sensor_msgs.msg import Image
 
     class TutorialProcessing(Node):
@@ -81,12 +77,14 @@ def tutorial_node(work_ms):
             self.publisher_.publish(self.bridge.cv2_to_imgmsg(image, 'bgr8', header=msg.header))
 
     dds.use_packaged_profile()  # the same transport as the py_vision nodes
-    rclpy.init()
+    # Ctrl-C ends the loop between callbacks: rclpy's own handler would shut the context down
+    # under a callback still publishing, and the reference would end in a traceback.
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    stop = StopFlag()
     node = TutorialProcessing()
     try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
+        while not stop.is_set():
+            rclpy.spin_once(node, timeout_sec=0.1)
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
@@ -176,7 +174,6 @@ def main():
     options = parser.parse_args()
     loads = [float(v) for v in options.loads.split(',')]
 
-    from bench_common import local_node_env, save_results
     env = local_node_env()  # the collector joins the nodes on their transport
 
     period_ms = 1e3 / FPS

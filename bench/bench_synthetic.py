@@ -21,37 +21,17 @@ the YUYV to BGR conversion alone, which OpenCV's V4L2 backend pays for every fra
 camera too. Prints a Markdown table of medians and writes bench/results/synthetic.json.
 """
 
-from pathlib import Path
 import statistics
-import sys
 import time
 
+from bench_common import save_results
 import cv2
-
-REPO = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(REPO / 'py_vision'))
-
-from bench_common import save_results  # noqa: E402,I100
-from py_vision.capture import synthetic_device, synthetic_picture  # noqa: E402
+from fake_clock import FakeClock
+from py_vision.capture import synthetic_device, synthetic_picture
 
 SIZES = [(640, 480), (1280, 720), (1920, 1080)]
 SAMPLES = 200
 PACED = (640, 480, 30.0, 3.0)  # width, height, fps, seconds of real-time reading
-
-
-class LateClock:
-    """A clock one frame period further on at every look: read() never has to wait."""
-
-    def __init__(self, fps):
-        self.t = 0.0
-        self.step = 1.0 / fps
-
-    def now(self):
-        self.t += self.step
-        return self.t
-
-    def sleep(self, seconds):
-        self.t += seconds
 
 
 def median_us(func):
@@ -65,7 +45,8 @@ def median_us(func):
 
 
 def unpaced_read_us(width, height):
-    devices = synthetic_device.SyntheticDevices(clock=LateClock(30.0))
+    # The tests' clock: a read's wait for its frame takes no time, and no frame is late.
+    devices = synthetic_device.SyntheticDevices(clock=FakeClock())
     cam = synthetic_device.SyntheticCamera(width, height, 30.0, name='bench', devices=devices)
     return median_us(cam.read)
 

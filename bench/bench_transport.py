@@ -34,48 +34,18 @@ bench/results/transport.json and prints Markdown tables.
 """
 
 import argparse
-import json
-import os
-from pathlib import Path
+import functools
 import re
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 
-BENCH = Path(__file__).resolve().parent
-REPO = BENCH.parent
-INSTALL = Path(os.environ.get('PY_VISION_INSTALL', REPO / 'install')).resolve()
-CLK_TCK = os.sysconf('SC_CLK_TCK')
-NETNS = ('pyvt_pub', 'pyvt_sub')
-VETH = ('pyvt_a', 'pyvt_b')
-ADDRESSES = ('10.78.0.1', '10.78.0.2')
-PRIVATE_SHM = 'mount -t tmpfs -o size=1g pyvt_shm /dev/shm && exec "$@"'
-
-sys.path.insert(0, str(REPO / 'py_vision' / 'test'))
-from ros_harness import DomainId  # noqa: E402,I100 (the tests' domain reservations)
-FIRST_FRAME_MARK = 'BENCH first frame'  # what bench_common.announce_first_frame prints
-
-
-def installed_env(domain):
-    """Return the environment of `source install/setup.bash`, without any DDS profile."""
-    out = subprocess.run(['bash', '-c', 'source "$0" && env -0', str(INSTALL / 'setup.bash')],
-                         check=True, capture_output=True).stdout
-    env = dict(item.split('=', 1) for item in out.decode().split('\0') if '=' in item)
-    for name in ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE',
-                 'RMW_IMPLEMENTATION', 'ROS_LOCALHOST_ONLY', 'ROS_STATIC_PEERS'):
-        env.pop(name, None)
-    env.update(ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED='1',
-               ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET')
-    return env
-
-
-def cpu_ticks(pid):
-    """Return utime + stime of a process in clock ticks."""
-    with open('/proc/%d/stat' % pid) as stream:
-        fields = stream.read().rsplit(')', 1)[1].split()
-    return int(fields[11]) + int(fields[12])
+from bench_common import (announce_first_frame, BENCH, CLK_TCK, cpu_ticks, FIRST_FRAME_MARK,
+                          monotonic, read_results, save_results, start_helper, StopFlag,
+                          write_json)
+import ros_harness
+from ros_harness import DomainId
 
 
 # ----------------------------------------------------------------------- helper processes
@@ -86,7 +56,6 @@ def run_subscriber(kind, topic, out):
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from rclpy.signals import SignalHandlerOptions
     from sensor_msgs.msg import CompressedImage, Image
-    from bench_common import announce_first_frame, monotonic, StopFlag, write_json
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     stop = StopFlag()
     node = rclpy.create_node('bench_transport_subscriber')
@@ -115,7 +84,6 @@ def run_reference(width, height, fps, out):
     import rclpy
     from rclpy.signals import SignalHandlerOptions
     from sensor_msgs.msg import CompressedImage
-    from bench_common import monotonic, StopFlag, write_json
     from py_vision.capture.synthetic_picture import synthetic_jpeg
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     stop = StopFlag()
@@ -140,7 +108,6 @@ def run_reference(width, height, fps, out):
 
 def run_camera(width, height, fps, pixel_format, out):
     """Read the synthetic camera alone, as the publisher does: what the camera costs."""
-    from bench_common import StopFlag, write_json
     import cv2
     from py_vision.capture import Camera
     cv2.setNumThreads(1)  # as usbcam_publisher runs it
@@ -163,49 +130,31 @@ class Case:
         self.args, self.env, self.workdir = args, env, workdir
         self.procs = []
 
-    def start(self, name, cmd, netns=None):
-        if netns:
-            cmd = ['ip', 'netns', 'exec', netns, 'unshare', '-m', 'sh', '-c',
-                   PRIVATE_SHM, 'sh'] + cmd
-        log = open(Path(self.workdir) / (name + '.log'), 'w')
-        proc = subprocess.Popen(cmd, env=self.env, stdout=log, stderr=subprocess.STDOUT,
-                                cwd=str(BENCH), start_new_session=True)
-        proc.name, proc.log, proc.out = name, log.name, str(Path(self.workdir) / (name + '.json'))
+    def start(self, name, cmd, wrap=None):
+        proc = start_helper(name, cmd, self.env, self.workdir, wrap)
         self.procs.append(proc)
         return proc
 
-    def subscriber(self, kind, topic, netns=None):
-        name = 'sub%d' % len(self.procs)
-        proc = self.start(name, [sys.executable, __file__, '--role', 'sub', kind, topic,
-                                 str(Path(self.workdir) / (name + '.json'))], netns)
-        self.wait_log(proc, 'subscribed')
+    def subscriber(self, kind, topic, wrap=None):
+        proc = self.start('sub%d' % len(self.procs), [
+            sys.executable, __file__, '--role', 'sub', kind, topic, '{out}'], wrap)
+        proc.wait_for_output('subscribed', 60.0)
         return proc
 
-    def publisher(self, params, role='publisher', netns=None):
-        name = 'pub%d' % len(self.procs)
+    def publisher(self, params, role='publisher', wrap=None):
         args = ['--ros-args'] + [a for k, v in params.items() for a in ('-p', '%s:=%s' % (k, v))]
-        return self.start(name, [sys.executable, str(BENCH / 'pyv_nodes.py'), role,
-                                 str(Path(self.workdir) / (name + '.json'))] + args, netns)
+        return self.start('pub%d' % len(self.procs), [
+            sys.executable, str(BENCH / 'pyv_nodes.py'), role, '{out}'] + args, wrap)
 
     def camera(self, width, height, fps, pixel_format):
-        name = 'cam%d' % len(self.procs)
-        return self.start(name, [sys.executable, __file__, '--role', 'cam', str(width),
-                                 str(height), str(fps), pixel_format,
-                                 str(Path(self.workdir) / (name + '.json'))])
+        return self.start('cam%d' % len(self.procs), [
+            sys.executable, __file__, '--role', 'cam', str(width), str(height), str(fps),
+            pixel_format, '{out}'])
 
     def reference(self, width, height, fps):
-        name = 'ref%d' % len(self.procs)
-        return self.start(name, [sys.executable, __file__, '--role', 'ref', str(width),
-                                 str(height), str(fps),
-                                 str(Path(self.workdir) / (name + '.json'))])
-
-    def wait_log(self, proc, text, timeout=60.0):
-        deadline = time.monotonic() + timeout
-        while text not in Path(proc.log).read_text(errors='replace'):
-            if proc.poll() is not None or time.monotonic() > deadline:
-                raise RuntimeError('%s never printed %r:\n%s' % (
-                    proc.name, text, Path(proc.log).read_text(errors='replace')))
-            time.sleep(0.05)
+        return self.start('ref%d' % len(self.procs), [
+            sys.executable, __file__, '--role', 'ref', str(width), str(height), str(fps),
+            '{out}'])
 
     def measure_cpu(self, proc):
         """Settle, then return the CPU % of proc over the window."""
@@ -220,15 +169,8 @@ class Case:
         """Stop every process (Ctrl-C), return {name: (results, log text)}."""
         results = {}
         for proc in reversed(self.procs):
-            if proc.poll() is None:
-                proc.send_signal(2)
-            try:
-                proc.wait(20)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, 9)
-                proc.wait()
-            data = json.loads(Path(proc.out).read_text()) if Path(proc.out).exists() else {}
-            results[proc.name] = (data, Path(proc.log).read_text(errors='replace'))
+            proc.end(timeout=20.0)
+            results[proc.name] = (read_results(proc) or {}, proc.output())
         return results
 
 
@@ -273,9 +215,9 @@ def run_cpu_case(args, env, case_def):
         else:
             pub = case.publisher(params, role)
         for sub in subs:
-            case.wait_log(sub, FIRST_FRAME_MARK)
+            sub.wait_for_output(FIRST_FRAME_MARK, 60.0)
         if not subs:
-            case.wait_log(pub, 'opened synthetic')
+            pub.wait_for_output('opened synthetic', 60.0)
             time.sleep(1.0)
         cpu = case.measure_cpu(pub)
         results = case.stop()
@@ -293,7 +235,7 @@ def bytes_cases(args, env):
             pub = case.publisher({'video_device': 'synthetic', 'image_width': width,
                                   'image_height': height, 'framerate': 30.0})
             for sub in (raw, compressed):
-                case.wait_log(sub, FIRST_FRAME_MARK)
+                sub.wait_for_output(FIRST_FRAME_MARK, 60.0)
             case.measure_cpu(pub)
             results = case.stop()
         row = {'size': '%dx%d' % (width, height)}
@@ -307,42 +249,25 @@ def bytes_cases(args, env):
     return rows
 
 
-def netns_setup():
-    commands = [
-        'ip netns add %s' % NETNS[0], 'ip netns add %s' % NETNS[1],
-        'ip link add %s type veth peer name %s' % VETH,
-        'ip link set %s netns %s' % (VETH[0], NETNS[0]),
-        'ip link set %s netns %s' % (VETH[1], NETNS[1])]
-    for ns, dev, addr in zip(NETNS, VETH, ADDRESSES):
-        commands += ['ip -n %s addr add %s/24 dev %s' % (ns, addr, dev),
-                     'ip -n %s link set %s up' % (ns, dev), 'ip -n %s link set lo up' % ns,
-                     'ip -n %s route add 224.0.0.0/4 dev %s' % (ns, dev)]
-    for command in commands:
-        subprocess.run(command.split(), check=True)
-
-
-def netns_teardown():
-    for ns in NETNS:
-        subprocess.run(['ip', 'netns', 'del', ns], capture_output=True)
-
-
 def hosts_cases(args, env):
-    if os.geteuid() != 0:
-        print('hosts: needs root for network namespaces; skipped')
+    why_not = ros_harness.two_hosts_unavailable()
+    if why_not:
+        print('hosts: %s; skipped' % why_not)
         return []
     rows = []
-    netns_teardown()
-    netns_setup()
+    hosts = ros_harness.TwoHosts(('publisher', 'subscriber'))
     try:
         for width, height in ((640, 480), (1280, 720)):
             for topic, kind in (('usb_camera/image/compressed', 'compressed_be'),
                                 ('usb_camera/image', 'raw_be')):
                 with tempfile.TemporaryDirectory(prefix='pyv_transport_') as workdir:
                     case = Case(args, env, workdir)
-                    sub = case.subscriber(kind, topic, NETNS[1])
+                    sub = case.subscriber(kind, topic,
+                                          functools.partial(hosts.command, 'subscriber'))
                     case.publisher({'video_device': 'synthetic', 'image_width': width,
                                     'image_height': height, 'framerate': 30.0,
-                                    'reliability': 'best_effort'}, netns=NETNS[0])
+                                    'reliability': 'best_effort'},
+                                   wrap=functools.partial(hosts.command, 'publisher'))
                     time.sleep(3.0 + args.window)
                     results = case.stop()
                 records = results[sub.name][0].get('received', [])
@@ -357,7 +282,7 @@ def hosts_cases(args, env):
                 rows.append({'size': '%dx%d' % (width, height), 'topic': topic,
                              'received': len(records), 'delivered_percent': delivered})
     finally:
-        netns_teardown()
+        hosts.close()
     return rows
 
 
@@ -375,10 +300,9 @@ def main():
         if role == 'cam':
             return run_camera(int(rest[0]), int(rest[1]), float(rest[2]), rest[3], rest[4])
         return run_reference(int(rest[0]), int(rest[1]), float(rest[2]), rest[3])
-    sys.path.insert(0, str(BENCH))
-    from bench_common import save_results
     domain = DomainId()
-    env = installed_env(domain.value)
+    env = dict(ros_harness.plain_env(), ROS_DOMAIN_ID=str(domain.value),
+               ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET')
     result = {'window_s': args.window, 'repeat': args.repeat}
     if args.only in (None, 'cpu'):
         rounds = {}

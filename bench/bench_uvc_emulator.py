@@ -27,21 +27,16 @@ frame for YUYV. Prints a Markdown table and writes bench/results/uvc_emulator.js
 
 import json
 import os
-from pathlib import Path
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
 
+from bench_common import save_results, TESTS
 import cv2
-
-REPO = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(REPO / 'py_vision'))
-sys.path.insert(0, str(REPO / 'py_vision' / 'test'))
-
-from bench_common import save_results  # noqa: E402,I100
-import emulated_camera  # noqa: E402
+import emulated_camera
+import ros_harness
 
 MODES = [('MJPG', 1920, 1080, 30), ('MJPG', 1280, 720, 30), ('MJPG', 640, 480, 30),
          ('YUYV', 1920, 1080, 5), ('YUYV', 640, 480, 30)]
@@ -93,7 +88,7 @@ def main():
     state = tempfile.mkdtemp(prefix='bench_uvc_')
     camera = emulated_camera.EmulatedCamera(state, 'webcam_1080p')
     env = camera.env(dict(os.environ, PYTHONPATH=os.pathsep.join(
-        [str(REPO / 'py_vision' / 'test'), str(REPO / 'py_vision')])))
+        [str(TESTS), str(ros_harness.SITE_PACKAGES)])))
     rows = []
     try:
         for code, width, height, fps in MODES:

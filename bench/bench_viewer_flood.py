@@ -28,7 +28,6 @@ Usage: .venv/bin/python bench/bench_viewer_flood.py [--seconds 10]
 
 import argparse
 import json
-from pathlib import Path
 import socket
 import statistics
 import subprocess
@@ -36,14 +35,8 @@ import sys
 import threading
 import time
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / 'py_vision' / 'test'))
-
-from bench_common import save_results  # noqa: E402
-import ros_harness  # noqa: E402,I100 (puts the installed py_vision on sys.path)
-
-sys.path.insert(0, str(ros_harness.SITE_PACKAGES))
-from py_vision.viewer.server import WebViewer  # noqa: E402,I100
+from bench_common import save_results
+from py_vision.viewer.server import WebViewer
 
 TOKEN = 'bench-token-0123456789'
 ANSWER_TIMEOUT_S = 5.0

@@ -41,8 +41,8 @@ OUT = None
 class BenchPublisher(USBImagePublisher):
     """usbcam_publisher that remembers when it captured which frame."""
 
-    def _publish(self, camera, frame):
-        super()._publish(camera, frame)
+    def publish_image(self, camera, frame):
+        super().publish_image(camera, frame)
         record = self.__dict__.setdefault('bench_published', [])
         record.append((monotonic(), frame.index))
 

@@ -48,8 +48,11 @@ import sys
 import tempfile
 import time
 
-from bench_pipeline import (BENCH, CLK_TCK, cpu_ticks, DomainId, installed_env, percentile,
-                            Proc, REPO, RESULTS)
+from bench_common import (BENCH, CLK_TCK, cpu_ticks, read_results, REPO, RESULTS,
+                          start_helper)
+from py_vision.stats import percentile
+import ros_harness
+from ros_harness import DomainId
 
 LOG_FORMAT = '[{severity}] [{time}] [{name}]: {message}'
 ROLES = ('publisher', 'subscriber')
@@ -394,18 +397,17 @@ def plot(samples, warmup, path, title):
 # ----------------------------------------------------------------------------- main
 
 def start(args, env, workdir):
-    """Start the subscriber, then the publisher, through pyv_nodes; return both Procs."""
+    """Start the subscriber, then the publisher, through pyv_nodes; return both processes."""
     nodes = [sys.executable, str(BENCH / 'pyv_nodes.py')]
-    sub = Proc('subscriber', nodes + ['subscriber', '{out}', '--ros-args',
-                                      '-p', 'display:=none',
-                                      '-p', 'stats_period:=%r' % float(args.stats_period)],
-               env, workdir)
-    pub = Proc('publisher', nodes + ['publisher', '{out}', '--ros-args',
-                                     '-p', 'video_device:=synthetic',
-                                     '-p', 'image_width:=%d' % args.width,
-                                     '-p', 'image_height:=%d' % args.height,
-                                     '-p', 'framerate:=%r' % float(args.fps)],
-               env, workdir)
+    sub = start_helper('subscriber', nodes + ['subscriber', '{out}', '--ros-args',
+                                              '-p', 'display:=none', '-p', 'stats_period:=%r'
+                                              % float(args.stats_period)], env, workdir)
+    pub = start_helper('publisher', nodes + ['publisher', '{out}', '--ros-args',
+                                             '-p', 'video_device:=synthetic',
+                                             '-p', 'image_width:=%d' % args.width,
+                                             '-p', 'image_height:=%d' % args.height,
+                                             '-p', 'framerate:=%r' % float(args.fps)],
+                       env, workdir)
     return {'publisher': pub, 'subscriber': sub}
 
 
@@ -452,12 +454,12 @@ def run(args, env, workdir, log=print):
         error = 'interrupted'
     finally:
         stop = time.monotonic()
-        status = {'publisher': procs['publisher'].stop()}
+        procs['publisher'].end(timeout=15.0)
         # Frames still in flight when the publisher stopped arrive within milliseconds.
         time.sleep(0.5)
-        sub = procs['subscriber']
-        status['subscriber'] = sub.stop()
-    records = {role: procs[role].results() for role in ROLES}
+        procs['subscriber'].end(timeout=15.0)
+        status = {role: procs[role].proc.returncode for role in ROLES}
+    records = {role: read_results(procs[role]) for role in ROLES}
     logs = {role: procs[role].output() for role in ROLES}
     return samples, started, stop, status, logs, records, error
 
@@ -489,7 +491,7 @@ def main(argv=None):
         parser.error('--minutes too short: the warm-up (%g s) leaves fewer than two samples'
                      % args.warmup)
 
-    env = installed_env()
+    env = ros_harness.plain_env()
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     env['RCUTILS_CONSOLE_OUTPUT_FORMAT'] = LOG_FORMAT
     env['RCUTILS_COLORIZED_OUTPUT'] = '0'

@@ -17,7 +17,9 @@ Run the colcon-installed py_vision executables and real ROS 2 peers from tests.
 
 Every test gets its own ROS_DOMAIN_ID (reserved with a lock file, so concurrent pytest runs on
 one machine never share one) and discovery stays on the local host. Processes a test starts are
-stopped by the test; waits poll for a condition with a deadline.
+stopped by the test; waits poll for a condition with a deadline. Two hosts on one LAN are two
+network namespaces (`TwoHosts`). The benchmarks (bench/) run on this harness too: the same
+environment, domain reservations, processes and hosts.
 """
 
 import fcntl
@@ -26,6 +28,7 @@ import os
 from pathlib import Path
 import random
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -145,6 +148,21 @@ def import_installed_package():
     os.environ['AMENT_PREFIX_PATH'] = installed_env()['AMENT_PREFIX_PATH']
 
 
+# What a shell may have set for DDS: a benchmark chooses each of these per case itself.
+DDS_CHOICES = ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE',
+               'RMW_IMPLEMENTATION', 'ROS_STATIC_PEERS', 'ROS_LOCALHOST_ONLY',
+               'ROS_AUTOMATIC_DISCOVERY_RANGE')
+
+
+def plain_env():
+    """Return installed_env() without the shell's DDS choices (DDS_CHOICES), output unbuffered."""
+    env = installed_env()
+    for name in DDS_CHOICES:
+        env.pop(name, None)
+    env['PYTHONUNBUFFERED'] = '1'
+    return env
+
+
 def node_env(domain_id, log_dir):
     """
     Return the environment for node processes on a test's domain.
@@ -219,14 +237,20 @@ class NodeProcess:
     """
     One installed executable running in its own process, output captured to a file.
 
-    Every failure it raises ends with the tail of the node's own log; kill() ends the process
-    and deletes that log.
+    `executable` is one of the package's, or a path (a Python, `ip`). Every failure it raises
+    ends with the tail of the node's own log; kill() ends the process and deletes that log,
+    unless it was written to `log_dir` (as `<name>.log`, kept for the caller).
     """
 
-    def __init__(self, executable, args, env, name=None):
+    def __init__(self, executable, args, env, name=None, log_dir=None):
         self.name = name or executable
-        handle, self.log_path = tempfile.mkstemp(prefix='py_vision_%s_' % self.name,
-                                                 suffix='.log')
+        if log_dir is None:
+            handle, self.log_path = tempfile.mkstemp(prefix='py_vision_%s_' % self.name,
+                                                     suffix='.log')
+        else:
+            self.log_path = str(Path(log_dir) / ('%s.log' % self.name))
+            handle = os.open(self.log_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+        self._keep_log = log_dir is not None
         path = executable if os.sep in executable else str(EXECUTABLES / executable)
         self.cmd = [path] + list(args)
         try:
@@ -234,10 +258,16 @@ class NodeProcess:
                                          stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                          start_new_session=True)
         except BaseException:
-            os.unlink(self.log_path)
+            if not self._keep_log:
+                os.unlink(self.log_path)
             raise
         finally:
             os.close(handle)
+
+    @property
+    def pid(self):
+        """Return the process id."""
+        return self.proc.pid
 
     def output(self):
         """Everything the process printed so far (stdout and stderr interleaved)."""
@@ -281,17 +311,28 @@ class NodeProcess:
         except subprocess.TimeoutExpired:
             self.fail('%s still running after %.1f s' % (self.name, timeout))
 
+    def end(self, sig=signal.SIGINT, timeout=5.0):
+        """
+        Send sig and wait for the exit; SIGKILL the whole group if it does not end in time.
+
+        Return True when it ended by itself (or had already), False when it had to be killed.
+        """
+        if self.proc.poll() is not None:
+            return True
+        self.proc.send_signal(sig)
+        try:
+            self.proc.wait(timeout)
+            return True
+        except subprocess.TimeoutExpired:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait()
+            return False
+
     def stop(self, sig=signal.SIGINT, timeout=5.0):
-        """Send sig and wait for the exit; kill the whole group if it does not end in time."""
-        if self.proc.poll() is None:
-            self.proc.send_signal(sig)
-            try:
-                self.proc.wait(timeout)
-            except subprocess.TimeoutExpired:
-                os.killpg(self.proc.pid, signal.SIGKILL)
-                self.proc.wait()
-                self.fail('%s ignored %s for %.1f s' % (
-                    self.name, signal.Signals(sig).name, timeout))
+        """Send sig and wait for the exit; fail, the whole group killed, if it does not end."""
+        if not self.end(sig, timeout):
+            self.fail('%s ignored %s for %.1f s' % (
+                self.name, signal.Signals(sig).name, timeout))
         return self.proc.returncode
 
     def kill(self):
@@ -300,15 +341,12 @@ class NodeProcess:
 
         A SIGKILLed node leaves its Fast DDS shared-memory segment in /dev/shm behind.
         """
-        if self.proc.poll() is None:
+        self.end(signal.SIGINT, timeout=5.0)
+        if not self._keep_log:
             try:
-                self.stop(signal.SIGINT, timeout=5.0)
-            except AssertionError:
-                pass  # stop() has killed it
-        try:
-            os.unlink(self.log_path)
-        except FileNotFoundError:
-            pass
+                os.unlink(self.log_path)
+            except FileNotFoundError:
+                pass
 
 
 class RosPeer:
@@ -349,3 +387,86 @@ class RosPeer:
         self.node.destroy_node()
         rclpy.shutdown(context=self.context)
         self._thread.join(2.0)
+
+
+def two_hosts_unavailable():
+    """Return why two hosts (network namespaces) cannot be made here, or None."""
+    if os.geteuid() != 0:
+        return 'network namespaces need root'
+    missing = [tool for tool in ('ip', 'unshare') if shutil.which(tool) is None]
+    if missing:
+        return 'network namespaces need the %s command' % ' and '.join(missing)
+    return None
+
+
+class TwoHosts:
+    """
+    Two hosts on one LAN: two network namespaces joined by a veth pair (root only).
+
+    `names` are the hosts' names ('board', 'pc'); `tag` (a few digits, e.g. a domain id) keeps
+    the namespaces and links of concurrent runs apart. Each host has its own address on one /24,
+    its loopback, and a route for discovery's multicast out of the veth; the links are up
+    before the constructor returns (Fast DDS picks its interfaces at start-up).
+    `command(host, cmd)` is cmd run in a host; `close()` removes both namespaces.
+    """
+
+    def __init__(self, names=('board', 'pc'), tag=None):
+        tag = str(os.getpid() % 100000 if tag is None else tag)
+        subnet = int(tag) % 250
+        self.names = tuple(names)
+        self.namespace = {name: 'pvh%d%s' % (index, tag) for index, name in enumerate(names)}
+        self.device = {name: 'pvv%d%s' % (index, tag) for index, name in enumerate(names)}
+        self.address = {name: '10.215.%d.%d' % (subnet, index + 1)
+                        for index, name in enumerate(names)}
+        first, second = self.names
+        self.close()   # what a run killed before its cleanup left
+        try:
+            for name in self.names:
+                self._ip('netns', 'add', self.namespace[name])
+            self._ip('link', 'add', self.device[first], 'netns', self.namespace[first],
+                     'type', 'veth', 'peer', 'name', self.device[second],
+                     'netns', self.namespace[second])
+            for name in self.names:
+                ns, dev = self.namespace[name], self.device[name]
+                self._ip('-n', ns, 'addr', 'add', self.address[name] + '/24', 'dev', dev)
+                self._ip('-n', ns, 'link', 'set', dev, 'up')
+                self._ip('-n', ns, 'link', 'set', 'lo', 'up')
+                # Discovery multicast leaves through the veth (there is no default route).
+                self._ip('-n', ns, 'route', 'add', '224.0.0.0/4', 'dev', dev)
+            for name in self.names:
+                wait_until(lambda: 'state UP' in self.read(name, [
+                    'ip', '-o', 'link', 'show', 'dev', self.device[name]]),
+                    10, what='%s up in %s' % (self.device[name], self.namespace[name]))
+        except subprocess.CalledProcessError as error:
+            self.close()
+            raise RuntimeError('cannot make two hosts: %s' % (
+                error.stderr or error).strip()) from None
+
+    @staticmethod
+    def _ip(*args):
+        subprocess.run(('ip',) + args, check=True, capture_output=True, text=True)
+
+    def command(self, host, cmd, own_shm=True):
+        """
+        Return cmd as run in a host.
+
+        own_shm: with a /dev/shm of its own (a private mount), so that Fast DDS cannot carry
+        data through shared memory to the other host; processes that should share memory
+        on one host run without.
+        """
+        wrapped = [shutil.which('ip'), 'netns', 'exec', self.namespace[host]]
+        if own_shm:
+            # ip netns exec, unshare and sh all exec: the pid stays the command's own.
+            wrapped += ['unshare', '--mount', '--propagation', 'private', 'sh', '-c',
+                        'mount -t tmpfs tmpfs /dev/shm && exec "$@"', 'sh']
+        return wrapped + list(cmd)
+
+    def read(self, host, cmd):
+        """Return what cmd prints run in a host (a /proc or /sys file, a link's state)."""
+        return subprocess.run(['ip', 'netns', 'exec', self.namespace[host]] + list(cmd),
+                              capture_output=True, text=True).stdout
+
+    def close(self):
+        """Remove both namespaces (and so the veth pair)."""
+        for ns in self.namespace.values():
+            subprocess.run(['ip', 'netns', 'del', ns], capture_output=True)

@@ -262,68 +262,35 @@ def test_web_viewer_port_is_released_on_shutdown(launch, sig):
         again.bind(('127.0.0.1', port))
 
 
-NETNS_READY = os.geteuid() == 0 and shutil.which('ip') and shutil.which('unshare')
-
-
-@pytest.mark.skipif(not NETNS_READY and not os.environ.get('CI'),
-                    reason='network namespaces need root, ip and unshare (CI has them)')
+@pytest.mark.skipif(ros_harness.two_hosts_unavailable() is not None and not os.environ.get('CI'),
+                    reason='%s (CI has them)' % ros_harness.two_hosts_unavailable())
 def test_two_hosts_over_a_veth_pair(ros_env, domain_id, tmp_path):
     """Board and PC: publisher and subscriber in two network namespaces joined by veth."""
-    tag = '%d%d' % (os.getpid() % 1000, domain_id)
-    hosts = {'pvb%s' % tag: '10.213.%d.1' % (domain_id % 250),
-             'pvp%s' % tag: '10.213.%d.2' % (domain_id % 250)}
-    board, pc = hosts
-    veth = ('vb%s' % tag, 'vp%s' % tag)
-
-    def ip(*args):
-        subprocess.run(['ip'] + list(args), check=True, capture_output=True)
+    hosts = ros_harness.TwoHosts(('board', 'pc'), tag=domain_id)
+    env = ros_harness.with_discovery(dict(ros_env), 'subnet')
     procs = []
+
+    def in_host(host, name, cmd):
+        # A private /dev/shm per host, so Fast DDS cannot take a shared-memory shortcut.
+        cmd = hosts.command(host, cmd)
+        procs.append(ros_harness.NodeProcess(cmd[0], cmd[1:], env, name=name,
+                                             log_dir=tmp_path))
+        return procs[-1]
     try:
-        for ns in hosts:
-            ip('netns', 'add', ns)
-        ip('link', 'add', veth[0], 'netns', board, 'type', 'veth', 'peer', 'name', veth[1],
-           'netns', pc)
-        for ns, dev in zip(hosts, veth):
-            ip('-n', ns, 'addr', 'add', hosts[ns] + '/24', 'dev', dev)
-            ip('-n', ns, 'link', 'set', dev, 'up')
-            ip('-n', ns, 'link', 'set', 'lo', 'up')
-
-        def link_up(ns, dev):
-            state = subprocess.run(['ip', '-n', ns, '-o', 'link', 'show', 'dev', dev],
-                                   capture_output=True, text=True).stdout
-            return 'state UP' in state
-        # Fast DDS picks its interfaces at start-up: the veth must be up before the nodes are.
-        for ns, dev in zip(hosts, veth):
-            wait_until(lambda: link_up(ns, dev), 10, what='%s up in %s' % (dev, ns))
-        env = ros_harness.with_discovery(dict(ros_env), 'subnet')
-
-        def in_host(ns, cmd, log):
-            # A private /dev/shm per host, so Fast DDS cannot take a shared-memory shortcut.
-            shell = 'mount -t tmpfs tmpfs /dev/shm && exec "$@"'
-            wrapped = ['ip', 'netns', 'exec', ns, 'unshare', '--mount', 'sh', '-c', shell,
-                       'sh'] + cmd
-            return subprocess.Popen(wrapped, env=env, stdout=log, stderr=subprocess.STDOUT,
-                                    start_new_session=True)
-        checker_log = open(tmp_path / 'checker.log', 'w+')
-        publisher_log = open(tmp_path / 'publisher.log', 'w+')
-        checker = str(Path(__file__).parents[1] / 'frame_checker.py')
-        procs.append(in_host(pc, [sys.executable, checker, '30'], checker_log))
-        procs.append(in_host(board, [str(ros_harness.EXECUTABLES / 'usbcam_publisher'),
-                                     '--ros-args', '-p', 'video_device:=synthetic',
-                                     '-p', 'framerate:=15.0'], publisher_log))
+        checker = in_host('pc', 'checker', [
+            sys.executable, str(Path(__file__).parents[1] / 'frame_checker.py'), '30'])
+        in_host('board', 'usbcam_publisher', [
+            str(ros_harness.EXECUTABLES / 'usbcam_publisher'), '--ros-args',
+            '-p', 'video_device:=synthetic', '-p', 'framerate:=15.0'])
         try:
-            procs[0].wait(60)
+            checker.proc.wait(60)
         except subprocess.TimeoutExpired:
-            publisher_log.seek(0)
-            checker_log.seek(0)
-            raise AssertionError('no 30 frames across the veth pair in 60 s:\n%s\n%s' % (
-                publisher_log.read(), checker_log.read()))
-        checker_log.seek(0)
-        result = json.loads(checker_log.read().strip().splitlines()[-1])
+            raise AssertionError('no 30 frames across the veth pair in 60 s:\n%s' % '\n'.join(
+                proc.tail() for proc in procs)) from None
+        result = json.loads(checker.output().strip().splitlines()[-1])
         assert result['frames'] == 30 and result['intact'] == 30, result
         assert result['indexes'] == sorted(result['indexes'])
     finally:
         for proc in procs:
-            ros_harness.end_process_group(proc)
-        for ns in hosts:
-            subprocess.run(['ip', 'netns', 'del', ns], capture_output=True)
+            proc.kill()
+        hosts.close()

@@ -25,8 +25,6 @@ board's subscriber gets every frame, intact, and the PC none.
 import json
 import os
 from pathlib import Path
-import shutil
-import subprocess
 import sys
 
 from py_vision import dds
@@ -34,7 +32,6 @@ import pytest
 import ros_harness
 from ros_harness import wait_until
 
-NETNS_READY = os.geteuid() == 0 and shutil.which('ip') and shutil.which('unshare')
 CHECKER = str(Path(__file__).parents[1] / 'frame_checker.py')
 SAME_HOST_FRAMES = 30
 # How long the PC keeps listening after the board's subscriber has its frames: the control
@@ -42,78 +39,43 @@ SAME_HOST_FRAMES = 30
 NOTHING_FOR_S = 6.0
 
 pytestmark = pytest.mark.skipif(
-    not NETNS_READY and not os.environ.get('CI'),
-    reason='network namespaces need root, ip and unshare (CI has them)')
+    ros_harness.two_hosts_unavailable() is not None and not os.environ.get('CI'),
+    reason='%s (CI has them)' % ros_harness.two_hosts_unavailable())
 
 
-class TwoHosts:
-    """Network namespaces 'board' and 'pc' joined by a veth pair; processes run in them."""
+class Hosts:
+    """The board and the PC (ros_harness.TwoHosts), and the processes a test starts on them."""
 
     def __init__(self, domain_id, workdir):
-        tag = '%d%d' % (os.getpid() % 1000, domain_id)
-        net = domain_id % 250
-        self.addr = {'board': '10.214.%d.1' % net, 'pc': '10.214.%d.2' % net}
-        self.ns = {'board': 'pvlb%s' % tag, 'pc': 'pvlp%s' % tag}
+        self.net = ros_harness.TwoHosts(('board', 'pc'), tag=domain_id)
         self.workdir = workdir
         self.procs = []
-        for ns in self.ns.values():
-            self._ip('netns', 'add', ns)
-        veth = {'board': 'vlb%s' % tag, 'pc': 'vlp%s' % tag}
-        self._ip('link', 'add', veth['board'], 'netns', self.ns['board'], 'type', 'veth',
-                 'peer', 'name', veth['pc'], 'netns', self.ns['pc'])
-        for host, ns in self.ns.items():
-            self._ip('-n', ns, 'addr', 'add', self.addr[host] + '/24', 'dev', veth[host])
-            self._ip('-n', ns, 'link', 'set', veth[host], 'up')
-            self._ip('-n', ns, 'link', 'set', 'lo', 'up')
-            # Discovery multicast leaves through the veth (there is no default route).
-            self._ip('-n', ns, 'route', 'add', '224.0.0.0/4', 'dev', veth[host])
-        # Fast DDS picks its interfaces at start-up: the veth must be up before the nodes are.
-        for host, ns in self.ns.items():
-            wait_until(lambda: 'state UP' in subprocess.run(
-                ['ip', '-n', ns, '-o', 'link', 'show', 'dev', veth[host]],
-                capture_output=True, text=True).stdout, 10, what='veth up in %s' % ns)
-
-    @staticmethod
-    def _ip(*args):
-        subprocess.run(('ip',) + args, check=True, capture_output=True)
 
     def start(self, host, name, cmd, env):
         """Start cmd on a host; the PC gets a /dev/shm of its own, as a real PC has."""
-        if host == 'pc':
-            cmd = ['unshare', '--mount', 'sh', '-c',
-                   'mount -t tmpfs tmpfs /dev/shm && exec "$@"', 'sh'] + cmd
-        log = open(self.workdir / ('%s.log' % name), 'w+')
-        proc = subprocess.Popen(['ip', 'netns', 'exec', self.ns[host]] + cmd, env=env,
-                                stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
-        proc.log = log
+        cmd = self.net.command(host, cmd, own_shm=host == 'pc')
+        proc = ros_harness.NodeProcess(cmd[0], cmd[1:], env, name=name, log_dir=self.workdir)
         self.procs.append(proc)
         return proc
 
     def logs(self):
-        text = []
-        for proc in self.procs:
-            proc.log.seek(0)
-            text.append('--- %s\n%s' % (Path(proc.log.name).name, proc.log.read()[-3000:]))
-        return '\n'.join(text)
+        return '\n'.join(proc.tail() for proc in self.procs)
 
     def close(self):
         for proc in self.procs:
-            ros_harness.end_process_group(proc)
-            proc.log.close()
-        for ns in self.ns.values():
-            subprocess.run(['ip', 'netns', 'del', ns], capture_output=True)
+            proc.kill()
+        self.net.close()
 
 
 @pytest.fixture
 def hosts(domain_id, tmp_path):
-    two = TwoHosts(domain_id, tmp_path)
+    two = Hosts(domain_id, tmp_path)
     yield two
     two.close()
 
 
 def checker_result(proc):
-    proc.log.seek(0)
-    lines = proc.log.read().strip().splitlines()
+    lines = proc.output().strip().splitlines()
     return json.loads(lines[-1]) if lines else None
 
 
@@ -161,7 +123,7 @@ def board_env(ros_env, setting):
 
 def pc_env(hosts, ros_env):
     """Return the PC's environment: network discovery, asking the board's address too."""
-    return ros_harness.with_discovery(dict(ros_env), 'subnet', peers=hosts.addr['board'])
+    return ros_harness.with_discovery(dict(ros_env), 'subnet', peers=hosts.net.address['board'])
 
 
 def start_publisher(hosts, env):
@@ -174,7 +136,7 @@ def start_publisher(hosts, env):
 def receives_nothing(proc):
     """Return True when proc (a frame checker for 1 frame) got nothing for NOTHING_FOR_S."""
     try:
-        wait_until(lambda: proc.poll() is not None, NOTHING_FOR_S, what='no frame')
+        wait_until(lambda: proc.proc.poll() is not None, NOTHING_FOR_S, what='no frame')
     except AssertionError:
         return checker_result(proc) is None
     return False
@@ -189,13 +151,13 @@ def test_localhost_only_keeps_frames_on_this_host(hosts, ros_env, case):
                             [sys.executable, CHECKER, str(SAME_HOST_FRAMES)], env)
     start_publisher(hosts, env)
     try:
-        wait_until(lambda: same_host.poll() is not None, 60,
+        wait_until(lambda: same_host.proc.poll() is not None, 60,
                    what='%d frames on the same host' % SAME_HOST_FRAMES)
         result = checker_result(same_host)
         assert result and result['frames'] == SAME_HOST_FRAMES, result
         assert result['intact'] == SAME_HOST_FRAMES, result
         if pc_receives:
-            wait_until(lambda: pc.poll() is not None, 30, what='a frame on the PC')
+            wait_until(lambda: pc.proc.poll() is not None, 30, what='a frame on the PC')
             assert checker_result(pc)['frames'] == 1
         else:
             assert receives_nothing(pc), 'a frame reached the other host'
@@ -212,7 +174,7 @@ def test_discovery_off_keeps_frames_in_the_process(hosts, ros_env):
                             ros_harness.with_discovery(dict(ros_env), 'localhost'))
     publisher = start_publisher(hosts, env)
     try:
-        wait_until(lambda: 'publishing on' in open(publisher.log.name).read(), 30,
+        wait_until(lambda: 'publishing on' in publisher.output(), 30,
                    what='the publisher to open its camera')
         assert receives_nothing(pc), 'a frame reached the other host'
         assert receives_nothing(same_host), 'a frame reached another process'
