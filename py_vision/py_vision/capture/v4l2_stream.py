@@ -26,7 +26,9 @@ poll() for a filled buffer and takes it (VIDIOC_DQBUF), handing out a view of it
 next `next_frame()`, so a frame is converted straight from the driver's memory and never
 copied on the way. `stop` ends the stream (VIDIOC_STREAMOFF) and keeps the device, its buffers
 and its controls, so that `start` resumes at once and nobody else can take the camera
-meanwhile; `release` gives everything back.
+meanwhile; `release` gives everything back. The device is polled only while it has buffers:
+a poll on a queue without any starts the read() emulation of a driver that offers read I/O
+(vivid does; uvcvideo does not), which allocates buffers of its own and makes S_FMT EBUSY.
 
 Structures are laid out from include/uapi/linux/videodev2.h with the machine's own alignment
 (`struct v4l2_buffer` holds a `struct timeval` of two longs and a union with a pointer: 88
@@ -138,8 +140,8 @@ class V4L2Source:
         self._whole = 0          # the bytes of a whole raw frame (0: compressed)
         self._wake_read, self._wake_write = os.pipe2(os.O_NONBLOCK | os.O_CLOEXEC)
         self._poll = select.epoll()
-        self._poll.register(self._fd, select.EPOLLIN)
         self._poll.register(self._wake_read, select.EPOLLIN)
+        self._polled = False    # the device is in the epoll set (only while it has buffers)
 
     # --- formats and controls: the device's own answers ------------------------------------
 
@@ -201,6 +203,11 @@ class V4L2Source:
             return
         if not self._maps:
             self._map_buffers()
+        if not self._polled:
+            # Polled only once it has buffers: polling a queue without any starts the read()
+            # emulation of a driver that has read I/O (vivid), which takes the queue.
+            self._poll.register(self._fd, select.EPOLLIN)
+            self._polled = True
         # After a STREAMON that failed (no room on the USB bus) the driver keeps the buffers
         # queued: queued again, they would be refused.
         if not self._queued:
@@ -336,6 +343,9 @@ class V4L2Source:
     def _free_buffers(self) -> None:
         self.stop()
         self._queued = False
+        if self._polled:
+            self._poll.unregister(self._fd)
+            self._polled = False
         if not self._maps:
             return
         self._arrays = []
