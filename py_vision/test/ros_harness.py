@@ -233,6 +233,12 @@ def end_process_group(proc, timeout=5.0):
             proc.wait()
 
 
+def _popen(cmd, env, log_fd, log_path):
+    """Start cmd in a session of its own, its output into log_fd."""
+    return subprocess.Popen(cmd, env=env, stdout=log_fd, stderr=subprocess.STDOUT,
+                            stdin=subprocess.DEVNULL, start_new_session=True)
+
+
 class NodeProcess:
     """
     One installed executable running in its own process, output captured to a file.
@@ -242,7 +248,11 @@ class NodeProcess:
     unless it was written to `log_dir` (as `<name>.log`, kept for the caller).
     """
 
-    def __init__(self, executable, args, env, name=None, log_dir=None):
+    def __init__(self, executable, args, env, name=None, log_dir=None, spawn=None):
+        """
+        Start it; `spawn(cmd, env, log_fd, log_path)`, when given, starts it instead of
+        subprocess.Popen and returns what stands for the Popen (poll, wait, send_signal, pid).
+        """
         self.name = name or executable
         if log_dir is None:
             handle, self.log_path = tempfile.mkstemp(prefix='py_vision_%s_' % self.name,
@@ -254,9 +264,7 @@ class NodeProcess:
         path = executable if os.sep in executable else str(EXECUTABLES / executable)
         self.cmd = [path] + list(args)
         try:
-            self.proc = subprocess.Popen(self.cmd, env=env, stdout=handle,
-                                         stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                         start_new_session=True)
+            self.proc = (spawn or _popen)(self.cmd, env, handle, self.log_path)
         except BaseException:
             if not self._keep_log:
                 os.unlink(self.log_path)

@@ -156,19 +156,6 @@ class ForkedProcess:
                 os.kill(self.pid, sig)
 
 
-class ForkedNode(NodeProcess):
-    """A NodeProcess the agent forked: output in a file, stopped and read as on the host."""
-
-    def __init__(self, launcher, executable, args, env, name=None):
-        self.name = name or executable
-        handle, self.log_path = tempfile.mkstemp(prefix='py_vision_%s_' % self.name,
-                                                 suffix='.log')
-        os.close(handle)
-        path = executable if os.sep in executable else str(ros_harness.EXECUTABLES / executable)
-        self.cmd = [path] + list(args)
-        self.proc = launcher(self.cmd, env, self.log_path)
-
-
 class Vm:
     """
     What a function running in the VM gets: the device, nodes, a peer, a ROS domain of its own.
@@ -196,7 +183,7 @@ class Vm:
     def launch(self, executable, params=None, remaps=None, extra_args=(), name=None):
         """Start an installed executable with parameters and remappings given as dicts."""
         args = ros_harness.ros_args(params, remaps) + list(extra_args)
-        node = ForkedNode(self._launcher, executable, args, self.env, name)
+        node = NodeProcess(executable, args, self.env, name, spawn=self._launcher)
         self.nodes.append(node)
         return node
 
@@ -359,6 +346,8 @@ class Agent:
                 ours.close()
                 run_call(request, self.vivid, device, theirs, self.status_dir, self.answers)
                 code = 0
+            except BaseException:  # the call's own clean-up failed: that is its answer
+                self.answer(request['id'], {'error': traceback.format_exc()})
             finally:
                 os._exit(code)
         theirs.close()
@@ -462,7 +451,7 @@ def run_node(cmd, env, log_path):
 
 def run_call(request, vivid, device, sock, status_dir, answers):
     """In a child of the agent: call the requested function with a Vm; write the answer."""
-    def launch(cmd, env, log_path):
+    def launch(cmd, env, log_fd, log_path):
         send_message(sock, (cmd, env, log_path))
         return ForkedProcess(recv_message(sock), status_dir)
 

@@ -33,6 +33,7 @@ from listing_text import control_line, formats
 import numpy as np
 from param_client import describe_parameters, get_parameters, list_parameters, set_parameter
 from py_vision.control_names import param_name
+import pytest
 from rcl_interfaces.msg import ParameterType
 from ros_harness import wait_until
 from sensor_msgs.msg import Image
@@ -152,6 +153,52 @@ def test_yuyv_colour_bars_arrive_with_their_colours(vivid):
         for bar, (found, expected) in enumerate(zip(bar_colours(image), BARS_BGR)):
             assert max(abs(a - b) for a, b in zip(found, expected)) <= COLOUR_TOLERANCE, (
                 'bar %d is %s, not %s' % (bar, found, expected))
+
+
+def stream_as(vm, pixel_format, outputs):
+    """Stream the colour bars in a pixel format as each output; what each published."""
+    from py_vision.cv_bridge import CvBridge
+    bridge, got = CvBridge(), {}
+    for output in outputs:
+        frames = vm.peer.collect(Image, 'usb_camera/image')
+        node = vm.launch(NODE, params=dict(STREAM, **COLOUR_BARS, video_device=vm.device,
+                                           pixel_format=pixel_format, output_encoding=output))
+        wait_until(lambda: len(frames) >= 3, 120, what='3 frames')
+        node.end(timeout=60)   # Ctrl-C, the VM's CPU being slow: the device free again
+        got[output] = [(msg.encoding, msg.step, len(msg.data),
+                        bridge.imgmsg_to_cv2(msg, 'bgr8')) for msg in list(frames)[-2:]]
+        got[output + ' log'] = node.output()
+    return got
+
+
+# Each raw format the issue names: the encoding native publishes, its bytes per pixel.
+RAW = {'GREY': ('mono8', 1), 'RGB3': ('rgb8', 3), 'YUYV': ('yuv422_yuy2', 2),
+       'UYVY': ('yuv422', 2), 'NV12': ('bgr8', 3)}   # sensor_msgs has no NV12: converted
+
+
+@pytest.mark.parametrize('fourcc', list(RAW))
+def test_every_raw_format_streams_right_as_native_and_as_bgr8(vivid, fourcc):
+    got = vivid.run(stream_as, pixel_format=fourcc, outputs=['native', 'bgr8'])
+    native, bytes_per_pixel = RAW[fourcc]
+    for output, encoding in (('native', native), ('bgr8', 'bgr8')):
+        log = got[output + ' log']
+        assert 'opened %s: 320x180 %s at' % ('/dev/video0', fourcc) in log, log
+        for published, step, size, image in got[output]:
+            assert published == encoding, (output, published)
+            if output == 'native':   # the camera's bytes, in its own layout
+                assert (step, size) == (320 * bytes_per_pixel, 320 * 180 * bytes_per_pixel)
+            found = bar_colours(image)
+            if fourcc == 'GREY':
+                # Grey bars: the colour bars' luma, white to black, each darker than the last.
+                levels = [colour[0] for colour in found]
+                assert all(colour == (level,) * 3 for colour, level in zip(found, levels))
+                assert levels[0] > 200 and levels[-1] < 40, levels
+                assert all(a > b + 8 for a, b in zip(levels, levels[1:])), levels
+                continue
+            for bar, (colour, expected) in enumerate(zip(found, BARS_BGR)):
+                assert max(abs(a - b) for a, b in zip(colour, expected)) <= \
+                    COLOUR_TOLERANCE, '%s as %s: bar %d is %s, not %s' % (
+                        fourcc, output, bar, colour, expected)
 
 
 # Values other than each control's default, of every type one number sets (but a button).
