@@ -33,6 +33,10 @@ What happens with each kind of input (camera_info_manager's choice unless said o
 - A URL that cannot be used (unknown scheme, relative file path, unknown package), a missing
   file, malformed YAML, a missing or wrong-sized matrix, non-numeric data, or values that
   `validate_camera_info` rejects: one warning naming the file and the key or line, uncalibrated.
+  So is what is no calibration file at all: anything but a regular file (a FIFO, a device such
+  as /dev/zero, a directory: refused by its type, before it is opened, so that reading never
+  waits), a file over MAX_FILE_BYTES (1 MiB; cameracalibrator writes about 1 KB), or YAML nested
+  deeper than the parser's recursion allows.
 - A file for another camera name: one warning, and the calibration is used all the same.
 - A calibration for another resolution than the camera delivers: one warning, and the
   published CameraInfo is uncalibrated for the delivered size (what camera1394 and
@@ -55,6 +59,7 @@ import copy
 import math
 import os
 import re
+import stat
 import tempfile
 import threading
 from typing import Protocol
@@ -64,6 +69,8 @@ from sensor_msgs.msg import CameraInfo
 import yaml
 
 DEFAULT_URL = 'file://${ROS_HOME}/camera_info/${NAME}.yaml'
+# The largest calibration file read: cameracalibrator's are about 1 KB.
+MAX_FILE_BYTES = 1 << 20
 
 # Number of distortion coefficients each well-known model takes (sensor_msgs'
 # distortion_models); other model names are passed through with any count.
@@ -168,6 +175,9 @@ class _Document:
             raise CalibrationError(message) from None
         except yaml.YAMLError as error:
             raise CalibrationError('%s: not valid YAML: %s' % (source, error)) from None
+        except RecursionError:
+            raise CalibrationError('%s: not a calibration: its YAML nests too deep' % source
+                                   ) from None
         if self.root is None:
             raise CalibrationError('%s is empty: expected a calibration (image_width, '
                                    'image_height, camera_matrix, ...)' % source)
@@ -237,21 +247,51 @@ def _show(node: yaml.Node) -> str:
     return repr(node.value) if isinstance(node, yaml.ScalarNode) else 'a ' + node.id
 
 
+def _kind(mode: int) -> str:
+    for test, kind in ((stat.S_ISDIR, 'a directory'), (stat.S_ISFIFO, 'a FIFO'),
+                       (stat.S_ISCHR, 'a character device'), (stat.S_ISBLK, 'a block device'),
+                       (stat.S_ISSOCK, 'a socket')):
+        if test(mode):
+            return kind
+    return 'not a file'
+
+
+def _read_file(path: str) -> str:
+    """Return the text of the calibration file path; CalibrationError if it is not one."""
+    def refuse(mode):
+        return CalibrationError('%s is not a regular file (%s): not a calibration' % (
+            path, _kind(mode)))
+    try:
+        # By its type first: opening a FIFO waits for a writer, reading a device never ends.
+        mode = os.stat(path).st_mode
+        if not stat.S_ISREG(mode):
+            raise refuse(mode)
+        # Non-blocking, in case a FIFO took the file's place since.
+        descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY)
+        with os.fdopen(descriptor, 'rb') as stream:
+            mode = os.fstat(stream.fileno()).st_mode
+            if not stat.S_ISREG(mode):
+                raise refuse(mode)
+            data = stream.read(MAX_FILE_BYTES + 1)
+    except FileNotFoundError:
+        raise CalibrationError('%s does not exist' % path) from None
+    except OSError as error:
+        raise CalibrationError('cannot read %s: %s' % (path, error.strerror or error)) from None
+    if len(data) > MAX_FILE_BYTES:
+        raise CalibrationError('%s is over %d bytes: not a calibration' % (path, MAX_FILE_BYTES))
+    try:
+        return data.decode('utf-8')
+    except UnicodeDecodeError as error:
+        raise CalibrationError('cannot read %s: %s' % (path, error)) from None
+
+
 def load_calibration(path: str) -> tuple[str, CameraInfo]:
     """
     Read a camera_calibration YAML file: return (camera name in the file, CameraInfo).
 
     Raise CalibrationError naming the file and the line or key for a missing or malformed file.
     """
-    try:
-        with open(path, encoding='utf-8') as stream:
-            text = stream.read()
-    except FileNotFoundError:
-        raise CalibrationError('%s does not exist' % path) from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise CalibrationError('cannot read %s: %s' % (
-            path, getattr(error, 'strerror', None) or error)) from None
-    doc = _Document(text, path)
+    doc = _Document(_read_file(path), path)
     fields = doc.mapping(doc.root, 'calibration')
     info = CameraInfo()
     info.width = doc.integer(doc.require(fields, 'image_width', doc.root), 'image_width', 1)

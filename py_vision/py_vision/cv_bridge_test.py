@@ -42,7 +42,7 @@ from py_vision.node_main import main_for
 from py_vision.params import Parameters, Spec, viewer_specs
 from py_vision.qos import publisher_qos
 from py_vision.stats import stamp_age_s, StreamStats
-from py_vision.transport import ImagePublisher, subscribe, TRANSPORTS
+from py_vision.transport import ImagePublisher, MAX_IMAGE, subscribe, TRANSPORTS
 from py_vision.viewer.display import Display, DISPLAYS
 from rclpy.node import Node
 from sensor_msgs.msg import CompressedImage
@@ -80,9 +80,10 @@ class ProcessingStats:
         self._output = StreamStats(window_s=STATS_PERIOD_S)
         self._lock = threading.Lock()
 
-    def add_output(self, age_s: float, width: int, height: int) -> int:
-        """Record one published frame and how old it was; return the number published."""
-        self.worker.record_age(age_s)
+    def add_output(self, age_s: Optional[float], width: int, height: int) -> int:
+        """Record one published frame and how old it was (None: not stamped); return how many."""
+        if age_s is not None:
+            self.worker.record_age(age_s)
         with self._lock:
             self._output.add(age_s, width, height, 'bgr8')
             return self._output.frames
@@ -112,6 +113,7 @@ class CvBridgeTest(Node):
         Spec('image_transport', 'raw', 'raw: sensor_msgs/Image on usb_camera/image; '
              'compressed: sensor_msgs/CompressedImage on usb_camera/image/compressed',
              choices=TRANSPORTS),
+        MAX_IMAGE,
         Spec('simulated_work_ms', 0.0, 'busy processing time added to every frame, to try '
              'the pipeline with a slow step', (0.0, MAX_SIMULATED_WORK_MS), live=True),
     )
@@ -144,7 +146,8 @@ class CvBridgeTest(Node):
                                         window_s=STATS_PERIOD_S, name='processing')
         self.stats = ProcessingStats(self.worker)
         self.subscription_ = subscribe(self, 'usb_camera/image', values['image_transport'],
-                                       self.worker.offer, depth=1)
+                                       self.worker.offer, depth=1,
+                                       max_image_mb=values['max_image_mb'])
         self._shown_lock = threading.Lock()
         self._to_show: Optional[np.ndarray] = None
         # OpenCV windows belong to the executor's thread: the worker hands frames over.

@@ -18,11 +18,15 @@ The `main()` every py_vision executable shares: start-up, spin and a quiet, clea
 - ``--help`` / ``-h`` prints the node's parameters and exits 0 without starting anything.
 - Malformed ``--ros-args`` are one error line and exit status 2.
 - Bad configuration (ConfigError) is one error line and exit status 1.
-- Ctrl-C (SIGINT) and SIGTERM end the node with status 0, no traceback and, once it was built,
-  a last line `stopped by SIGINT` after its clean-up, whatever it was doing when the signal came.
+- Ctrl-C (SIGINT), SIGTERM and SIGHUP (a closed terminal) end the node with status 0, no
+  traceback and, once it was built, a last line `stopped by SIGINT` after its clean-up, whatever
+  it was doing when the signal came.
+- Nothing that arrives over ROS ends a node: an exception raised by a callback (a malformed
+  request in rclpy's own parameter service, a defect in the node's) is one error line per kind
+  and minute (`CallbackFailures`), and the node goes on.
   The first signal stops the node; further ones (`ros2 launch` sends its own SIGINT after the
   terminal's) are ignored, so the clean-up always runs to its end.
-- A node's command (``usbcam_publisher --list-formats``) interrupted by Ctrl-C or SIGTERM ends
+- A node's command (``usbcam_publisher --list-formats``) interrupted by a signal ends
   at once, without a traceback, with the shell's status for it (130 for SIGINT, 143 for
   SIGTERM): unlike a node, whose normal end is a signal, the command did not finish its work.
 
@@ -35,20 +39,26 @@ itself. Nothing shuts rclpy down behind the main thread's back.
 """
 
 import os
+from pathlib import Path
 import signal
 import sys
 import tempfile
 import threading
+import traceback
 from typing import Callable, ClassVar, Dict, List, Protocol, Sequence, Type
 
 from py_vision import dds
 from py_vision.params import ConfigError, help_text, Spec
+from py_vision.throttled_log import ThrottledLog
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.logging import get_logger
 from rclpy.signals import SignalHandlerOptions
 
 __all__ = ['ConfigError', 'main_for', 'NodeProgram', 'run']
+
+# What stops a node: Ctrl-C, `kill` or a service manager, a closed terminal or ssh session.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 class NodeProgram(Protocol):
@@ -105,9 +115,9 @@ def _request_stop(signum):
 
 
 def install_quiet_signals():
-    """Make SIGINT and SIGTERM requests to stop, which run() carries out (main thread only)."""
+    """Make the stop signals requests to stop, which run() carries out (main thread only)."""
     if threading.current_thread() is threading.main_thread():
-        for sig in (signal.SIGINT, signal.SIGTERM):
+        for sig in STOP_SIGNALS:
             signal.signal(sig, _on_signal)
 
 
@@ -125,7 +135,7 @@ def _run_command(command, argv):
     if threading.current_thread() is not threading.main_thread():
         return command(argv)
     try:
-        for sig in (signal.SIGINT, signal.SIGTERM):
+        for sig in STOP_SIGNALS:
             signal.signal(sig, _interrupt)
         return command(argv)
     except _Interrupted as stop:
@@ -136,7 +146,7 @@ def _run_command(command, argv):
 
 class SignalWatch:
     """
-    Wake an executor for SIGINT and SIGTERM, whichever thread the kernel delivers them to.
+    Wake an executor for the stop signals, whichever thread the kernel delivers them to.
 
     Python runs a signal's handler in the main thread only, and only between two bytecodes:
     never while that thread sleeps in rcl_wait. Its C-level handler, which runs at once in
@@ -222,7 +232,7 @@ def _shutdown_quietly():
 
 def run(node_class: Type[NodeProgram], args=None) -> int:
     """
-    Build node_class() and spin it until Ctrl-C, SIGTERM or rclpy shutdown; return the status.
+    Build node_class() and spin it until a stop signal or rclpy shutdown; return the status.
 
     node_class is what NodeProgram describes.
     """
@@ -266,7 +276,7 @@ def run(node_class: Type[NodeProgram], args=None) -> int:
             stop_guard = node.create_guard_condition(lambda: None)
             _Stopping.wake = stop_guard.trigger
             watch = SignalWatch(stop_guard)
-            _spin(executor)
+            _spin(executor, CallbackFailures(node.get_logger()))
     except ConfigError as error:
         logger = node.get_logger() if _has_logger(node) else get_logger(node_class.NODE_NAME)
         logger.error(str(error))
@@ -298,20 +308,51 @@ def run(node_class: Type[NodeProgram], args=None) -> int:
     return status
 
 
-def _spin(executor):
-    """Spin until a signal is received or rclpy is shut down."""
+class CallbackFailures:
+    """The exceptions callbacks raised: one error line per kind and minute, not the node's end."""
+
+    PERIOD_S = 60.0
+    # The executor's own frames, between spin_once() and the callback that raised.
+    _EXECUTOR_FILES = ('executors.py', 'task.py')
+
+    def __init__(self, logger):
+        self._log = ThrottledLog(logger, self.PERIOD_S)
+
+    def record(self, error: Exception) -> None:
+        """Log error (once per kind and period), naming the callback that raised it."""
+        frames = [frame for frame in traceback.extract_tb(error.__traceback__)
+                  if Path(frame.filename).name not in self._EXECUTOR_FILES and
+                  Path(frame.filename).name != Path(__file__).name]
+        where = ''
+        if frames:
+            path = Path(frames[0].filename)
+            where = ' in %s (%s/%s)' % (frames[0].name, path.parent.name, path.name)
+        kind = '%s%s' % (type(error).__name__, where)
+        self._log.error(kind, 'a callback failed%s: %s: %s; it was skipped and the node goes on'
+                        % (where, type(error).__name__, error))
+
+
+def _spin(executor, failures: CallbackFailures):
+    """Spin until a signal is received or rclpy is shut down; a failing callback is logged."""
     # spin_once() returns after every callback, the stop guard's included; the guard, which
     # a signal triggers, only wakes an idle executor.
     while _Stopping.signum is None and executor.context.ok():
-        executor.spin_once()
+        try:
+            executor.spin_once()
+        except ExternalShutdownException:
+            raise
+        except Exception as error:  # raised by a callback (spin_once passes it on)
+            if _Stopping.signum is not None or not executor.context.ok():
+                raise  # rclpy shut down under the executor: run() handles it
+            failures.record(error)
 
 
 def _ignore_signals():
-    """Ignore SIGINT and SIGTERM from now on: the node is stopping and must finish doing so."""
+    """Ignore the stop signals from now on: the node is stopping and must finish doing so."""
     # SIG_IGN, unlike a Python handler, survives the interpreter's finalisation, which
     # otherwise puts the default action back while DDS participants are still being torn down.
     if threading.current_thread() is threading.main_thread():
-        for sig in (signal.SIGINT, signal.SIGTERM):
+        for sig in STOP_SIGNALS:
             signal.signal(sig, signal.SIG_IGN)
 
 

@@ -103,8 +103,8 @@ class Spec:
         elif kind is str and isinstance(value, (int, float)) and not isinstance(value, bool):
             value = str(value)  # video_device:=0 arrives as an integer
         if type(value) is not kind:
-            raise ConfigError('parameter %s must be %s (%s), got %r' % (
-                self.name, _TYPE_WORDS[kind], self.accepts(), value))
+            raise ConfigError('parameter %s must be %s (%s), got %s' % (
+                self.name, _TYPE_WORDS[kind], self.accepts(), _shown(value)))
         good = True
         if kind is float and not math.isfinite(value):
             good = False
@@ -118,8 +118,8 @@ class Spec:
         if self.check is not None and good:
             good = bool(self.check(value))
         if not good:
-            raise ConfigError('parameter %s: %r is not accepted; expected %s' % (
-                self.name, value, self.accepts()))
+            raise ConfigError('parameter %s: %s is not accepted; expected %s' % (
+                self.name, _shown(value), self.accepts()))
         return value
 
     def descriptor(self) -> ParameterDescriptor:
@@ -153,6 +153,12 @@ class Spec:
         return '  %s (%s, %s; default %s%s)\n      %s' % (
             self.name, _TYPE_NAMES[self.kind], self.accepts(), default,
             '; settable live' if self.live else '', self.description)
+
+
+def _shown(value: Any) -> str:
+    """Return value as an error message shows it: its repr, cut short when long."""
+    text = repr(value)
+    return text if len(text) <= 60 else '%s... (%d characters)' % (text[:50], len(text))
 
 
 def _number(value):

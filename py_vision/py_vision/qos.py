@@ -101,6 +101,7 @@ class ImageSubscription:
         self._node = node
         self._args = (msg_type, topic, callback)
         self._depth = depth
+        self._renew = False
         self.reliability = ReliabilityPolicy.RELIABLE
         self.subscription = self._create()
         self._recheck()
@@ -124,16 +125,26 @@ class ImageSubscription:
         # subscription's own callback is not safe; the next check (within check_period) does it.
         pass
 
+    def renew(self):
+        """
+        Make the subscription anew at the next check (within check_period).
+
+        The middleware keeps, for each subscription, buffers as large as the largest message
+        it received (Fast DDS' history): a new subscription gives that memory back.
+        """
+        self._renew = True
+
     def _recheck(self):
         # rclpy expands and remaps a relative name here, as it does for the subscription.
         publishers = self._node.get_publishers_info_by_topic(self._args[1])
         wanted = ReliabilityPolicy.RELIABLE
         if any(p.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT for p in publishers):
             wanted = ReliabilityPolicy.BEST_EFFORT
-        if wanted == self.reliability:
+        if wanted == self.reliability and not self._renew:
             return
-        self.reliability = wanted
+        changed, self.reliability, self._renew = wanted != self.reliability, wanted, False
         self._node.destroy_subscription(self.subscription)
         self.subscription = self._create()
-        self._node.get_logger().info('subscribed to %s as %s to match its publishers' % (
-            self.topic_name, wanted.name.lower()))
+        if changed:
+            self._node.get_logger().info('subscribed to %s as %s to match its publishers' % (
+                self.topic_name, wanted.name.lower()))

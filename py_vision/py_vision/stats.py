@@ -22,9 +22,12 @@ def stamp_age_s(now_ns, stamp):
     """
     Return how old a message's header stamp is at now_ns (a clock's nanoseconds), in seconds.
 
-    Plain arithmetic on the stamp's sec and nanosec: a stamp no rclpy Time can hold (sec is
+    None for a zero stamp: its publisher did not stamp the message, and it has no age. Plain
+    arithmetic on the stamp's sec and nanosec: a stamp no rclpy Time can hold (sec is
     signed, nanosec unchecked) is an implausible age, never an exception.
     """
+    if stamp.sec == 0 and stamp.nanosec == 0:
+        return None
     return (now_ns - (stamp.sec * 1000000000 + stamp.nanosec)) / 1e9
 
 
@@ -49,7 +52,7 @@ class StreamStats:
         self._last_arrival = None
 
     def add(self, latency_s, width, height, encoding):
-        """Record one received frame: its latency (stamp to arrival), size and encoding."""
+        """Record one frame: its latency (stamp to arrival; None: no stamp), size, encoding."""
         now = self._clock()
         if self._last_arrival is not None:
             self.longest_gap_s = max(self.longest_gap_s, now - self._last_arrival)
@@ -67,13 +70,14 @@ class StreamStats:
         now = self._clock()
         while self._recent and self._recent[0][0] < now - self.window_s:
             self._recent.popleft()
-        latencies = sorted(latency for _, latency in self._recent)
+        latencies = sorted(latency for _, latency in self._recent if latency is not None)
         fps = 0.0
         if len(self._recent) > 1:
             span = now - self._recent[0][0]
             fps = (len(self._recent) - 1) / span if span > 0 else 0.0
         return {
             'frames': self.frames,
+            'recent_frames': len(self._recent),
             'errors': self.errors,
             'fps': round(fps, 2),
             'latency_ms_p50': round(percentile(latencies, 0.5) * 1e3, 2) if latencies else None,

@@ -35,8 +35,9 @@ from typing import Callable, Optional, Tuple
 import cv2
 import numpy as np
 from py_vision.cv_bridge import fill_message_data
-from py_vision.params import Parameters
+from py_vision.params import Parameters, Spec
 from py_vision.qos import create_publisher, ImageSubscription
+from py_vision.throttled_log import ThrottledLog
 from sensor_msgs.msg import CompressedImage, Image
 
 try:
@@ -47,6 +48,10 @@ except ImportError:  # not installed, or older than 3.0 (Humble's boards have ne
 TRANSPORTS = ('raw', 'compressed')
 # The topics a camera's own video may be on, by their last name (`video_topic`).
 VIDEO_TRANSPORTS = ('foxglove', 'h264', 'h265')
+# The largest image a subscriber takes: an 8K bgr8 frame (7680x4320) is 99.5 MB.
+MAX_IMAGE = Spec('max_image_mb', 100.0, 'largest image taken, in MB (1e6 bytes) of pixels: a '
+                 'larger one (from any member of the ROS domain) is refused with a warning',
+                 (0.001, 10000.0))
 JPEG_FORMAT = 'bgr8; jpeg compressed bgr8'
 _SOF_MARKERS = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}
 
@@ -142,31 +147,69 @@ class ImagePublisher:
         return raw_done, compressed_done
 
 
-def subscribe(node, base_topic: str, transport: str, callback,
-              depth: int = 10) -> ImageSubscription:
+def image_bytes(msg) -> int:
+    """Return the bytes an image holds: an Image's pixels, a JPEG's decoded, or the data."""
+    if isinstance(msg, Image):
+        return max(len(msg.data), msg.height * msg.step)
+    size = jpeg_size(msg.data) if isinstance(msg, CompressedImage) and len(msg.data) else None
+    return max(len(msg.data), size[0] * size[1] * 3 if size else 0)
+
+
+class _SizeLimit:
+    """A subscription's callback that refuses images over max_bytes before anything else."""
+
+    def __init__(self, node, callback, max_bytes: float):
+        self._callback = callback
+        self._max_bytes = max_bytes
+        self._log = ThrottledLog(node.get_logger())
+        self.subscription: Optional[ImageSubscription] = None
+
+    def __call__(self, msg):
+        size = image_bytes(msg)
+        if size <= self._max_bytes:
+            self._callback(msg)
+            return
+        what = '%dx%d %s' % (msg.width, msg.height, msg.encoding) if isinstance(
+            msg, Image) else msg.format
+        self._log.warning('too large', 'refused a %s image of %.1f MB on %s: over max_image_mb '
+                          '(%g MB)' % (what[:40], size / 1e6, self.subscription.topic_name,
+                                       self._max_bytes / 1e6))
+        self.subscription.renew()
+
+
+def subscribe(node, base_topic: str, transport: str, callback, depth: int = 10,
+              max_image_mb: float = MAX_IMAGE.default) -> ImageSubscription:
     """
     Subscribe to base_topic's frames as `transport` says: raw Images or CompressedImages.
 
     With a video transport (VIDEO_TRANSPORTS) it reads the camera's own access units:
     CompressedVideo on ``T/foxglove``, CompressedImage on ``T/h264`` or ``T/h265``; ValueError
     when foxglove is asked for and foxglove_msgs is not installed. The subscription hears
-    reliable and best-effort publishers alike (qos.ImageSubscription).
+    reliable and best-effort publishers alike (qos.ImageSubscription). An image over
+    max_image_mb (of pixels, or of compressed data) never reaches callback: it is one
+    rate-limited warning, and the subscription is made anew so that the memory the middleware
+    took for it is given back.
     """
+    limit = _SizeLimit(node, callback, max_image_mb * 1e6)
     if transport in VIDEO_TRANSPORTS:
         topic = node.resolve_topic_name(base_topic) + '/' + transport
-        if transport != 'foxglove':
-            return ImageSubscription(node, CompressedImage, topic, callback, depth=depth)
-        if CompressedVideo is None:
-            raise ValueError(
-                'image_transport foxglove reads foxglove_msgs/CompressedVideo, and '
-                'foxglove_msgs 3.0 or newer is not installed here; a py_vision camera without '
-                'it publishes on %s/h264 (image_transport:=h264)' % node.resolve_topic_name(
-                    base_topic))
-        return ImageSubscription(node, CompressedVideo, topic, callback, depth=depth)
-    if transport == 'compressed':
-        return ImageSubscription(node, CompressedImage, compressed_topic(node, base_topic),
-                                 callback, depth=depth)
-    return ImageSubscription(node, Image, base_topic, callback, depth=depth)
+        msg_type = CompressedImage
+        if transport == 'foxglove':
+            if CompressedVideo is None:
+                raise ValueError(
+                    'image_transport foxglove reads foxglove_msgs/CompressedVideo, and '
+                    'foxglove_msgs 3.0 or newer is not installed here; a py_vision camera '
+                    'without it publishes on %s/h264 (image_transport:=h264)' % (
+                        node.resolve_topic_name(base_topic)))
+            msg_type = CompressedVideo
+        subscription = ImageSubscription(node, msg_type, topic, limit, depth=depth)
+    elif transport == 'compressed':
+        subscription = ImageSubscription(node, CompressedImage,
+                                         compressed_topic(node, base_topic), limit, depth=depth)
+    else:
+        subscription = ImageSubscription(node, Image, base_topic, limit, depth=depth)
+    limit.subscription = subscription
+    return subscription
 
 
 @dataclass(frozen=True)

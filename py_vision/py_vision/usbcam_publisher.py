@@ -85,6 +85,15 @@ CONTROL_SYNC_PERIOD_S = 0.5
 # After shutdown the process ends this much later, once the answer to the transition request
 # has gone out (ending rclpy at once could lose it, and `ros2 lifecycle set` would wait).
 EXIT_AFTER_SHUTDOWN_S = 0.5
+# A TF frame name: what tf2 and every viewer take, and what survives a C string (no NUL).
+FRAME_ID_RULE = '1 to 256 printable characters, without spaces'
+_MAX_FRAME_ID = 256
+
+
+def good_frame_id(frame_id: str) -> bool:
+    """Return True when frame_id follows FRAME_ID_RULE."""
+    return 0 < len(frame_id) <= _MAX_FRAME_ID and frame_id.isprintable() and (
+        not any(character.isspace() for character in frame_id))
 
 
 class USBImagePublisher(LifecycleNodeMixin, Node):
@@ -114,8 +123,8 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
                  names_accepted(), ', '.join(USB_CAM_PIXEL_FORMATS))),
         Spec('jpeg_quality', 80, 'JPEG quality of usb_camera/image/compressed when encoded '
              "here (an MJPEG camera's own JPEG is published as it is)", (1, 100), live=True),
-        Spec('frame_id', 'usb_camera', 'header.frame_id of the images', check=bool,
-             accepted='a non-empty string', live=True),
+        Spec('frame_id', 'usb_camera', 'header.frame_id of the images', check=good_frame_id,
+             accepted=FRAME_ID_RULE, live=True),
         Spec('camera_name', 'usb_camera', 'camera name for the calibration (${NAME})',
              check=is_valid_camera_name, accepted='letters, digits and _'),
         Spec('camera_info_url', '', 'calibration file: file:///path.yaml or '
@@ -268,8 +277,11 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
     def _set_camera_info(self, request, response):
         response.success, response.status_message = self.calibration.set_camera_info(
             request.camera_info)
-        log = self.get_logger().info if response.success else self.get_logger().warning
-        log('set_camera_info: %s' % response.status_message)
+        # One call site per severity: rclpy refuses one whose severity changes (ValueError).
+        if response.success:
+            self.get_logger().info('set_camera_info: %s' % response.status_message)
+        else:
+            self.get_logger().warning('set_camera_info: %s' % response.status_message)
         return response
 
     # --- capture ---------------------------------------------------------------------
@@ -300,14 +312,22 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         # else: Ctrl-C or SIGTERM shut rclpy down while a frame was being published.
 
     def _capture_stamp(self, captured):
-        """Return the capture time (time.monotonic(), or None) of a frame as a ROS time."""
-        now = self.get_clock().now()
-        if captured is None:
-            return now  # no capture time: the read has just returned the frame
-        age_s = time.monotonic() - captured
-        if not 0 <= age_s < 1.0:
+        """
+        Return the capture time (time.monotonic(), or None) of a frame on the node's clock.
+
+        The node's clock now, less the frame's age. A simulated clock (use_sim_time, /clock)
+        does not run with the camera's time: there, and on a clock too young to hold the age
+        (a simulation starting at 0), the frame is stamped with the clock's time now, so that
+        stamps follow the clock wherever it goes (also back, when a bag loops).
+        """
+        clock = self.get_clock()
+        now = clock.now()
+        if captured is None or clock.ros_time_is_active:
+            return now  # no capture time (the read has just returned the frame), or simulated
+        age_ns = int((time.monotonic() - captured) * 1e9)
+        if not 0 <= age_ns < 1000000000 or age_ns > now.nanoseconds:
             return now
-        return Time(nanoseconds=now.nanoseconds - int(age_s * 1e9), clock_type=now.clock_type)
+        return Time(nanoseconds=now.nanoseconds - age_ns, clock_type=now.clock_type)
 
     def publish_image(self, camera, frame):
         """Publish one frame: image (raw and compressed, as subscribed) and its CameraInfo."""

@@ -34,7 +34,7 @@ from py_vision.node_main import main_for
 from py_vision.params import ConfigError, Parameters, Spec, viewer_specs
 from py_vision.stats import stamp_age_s, StreamStats
 from py_vision.transport import (
-    jpeg_size, subscribe, TRANSPORTS, video_fields, VIDEO_TRANSPORTS)
+    jpeg_size, MAX_IMAGE, subscribe, TRANSPORTS, video_fields, VIDEO_TRANSPORTS)
 from py_vision.viewer.display import Display, DISPLAYS
 from rclpy.node import Node
 
@@ -60,6 +60,7 @@ class VideoSubscriber(Node):
              'H.264 as foxglove_msgs/CompressedVideo on <topic>/foxglove; h264, h265: as '
              'sensor_msgs/CompressedImage on <topic>/h264 or /h265',
              choices=TRANSPORTS + VIDEO_TRANSPORTS),
+        MAX_IMAGE,
     )
 
     display = None  # what close() finds when start-up was interrupted before it was made
@@ -83,7 +84,8 @@ class VideoSubscriber(Node):
         callback = {'compressed': self.on_compressed, 'raw': self.callback}.get(
             transport, self.on_video)
         try:
-            self.subscription_ = subscribe(self, IMAGE_TOPIC, transport, callback)
+            self.subscription_ = subscribe(self, IMAGE_TOPIC, transport, callback,
+                                           max_image_mb=values['max_image_mb'])
         except ValueError as error:
             raise ConfigError(str(error))
         self._stats_timer = self.create_timer(self.stats_period, self.report_stats)
@@ -172,7 +174,7 @@ class VideoSubscriber(Node):
         """Log one line: frames received so far, rate and latency lately, and any problems."""
         s = self.stats.snapshot()
         topic = self.subscription_.topic_name
-        if s['latency_ms_p50'] is None:
+        if not s['recent_frames']:
             self.get_logger().info('no frames on %s in the last %.3g s (%d received in total)' % (
                 topic, self.stats_period, s['frames']))
         else:
@@ -180,11 +182,12 @@ class VideoSubscriber(Node):
             if s['longest_gap_s'] > max(1.0, 5.0 / max(s['fps'], 1e-3)):
                 gap = ', gap of %.2f s' % s['longest_gap_s']
             rate = ('%.1f fps' % s['fps']) if s['fps'] > 0 else 'rate not measured yet'
-            self.get_logger().info(
-                'received %d frames (%s), latency p50 %.1f ms p99 %.1f ms, '
-                '%dx%d %s on %s%s' % (
-                    s['frames'], rate, s['latency_ms_p50'], s['latency_ms_p99'],
-                    s['width'], s['height'], s['encoding'], topic, gap))
+            latency = 'without a stamp (no latency)'
+            if s['latency_ms_p50'] is not None:
+                latency = 'latency p50 %.1f ms p99 %.1f ms' % (
+                    s['latency_ms_p50'], s['latency_ms_p99'])
+            self.get_logger().info('received %d frames (%s), %s, %dx%d %s on %s%s' % (
+                s['frames'], rate, latency, s['width'], s['height'], s['encoding'], topic, gap))
         self.stats.reset_gap()
         new_errors = self.stats.errors - self._errors_reported
         if new_errors > 0:
@@ -220,7 +223,7 @@ def stream_status(snapshot: dict, recent_errors: int, topic: str) -> Status:
               'size': '%dx%d' % (s['width'], s['height']), 'encoding': s['encoding']}
     if recent_errors:
         return Status(WARN, '%d frame(s) could not be shown lately' % recent_errors, values)
-    if s['latency_ms_p50'] is None:
+    if not s['recent_frames']:
         what = 'no frames on %s lately' if s['frames'] else 'waiting for frames on %s'
         return Status(WARN, what % topic, values)
     if s['fps'] <= 0:

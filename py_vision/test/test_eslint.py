@@ -45,8 +45,10 @@ def test_eslint():
     assert SCRIPTS, 'no script found in the viewer page folder'
     paths = os.pathsep.join(p for p in (DEBIAN_NODE_MODULES, os.environ.get('NODE_PATH'))
                             if p)
+    # From the package's folder: ESLint 6 fails on a file outside its working directory.
     result = subprocess.run(
-        [eslint, '--no-eslintrc', '--config', str(CONFIG), '--max-warnings', '0'] +
-        [str(path) for path in SCRIPTS], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-        text=True, env=dict(os.environ, NODE_PATH=paths), timeout=120)
+        [eslint, '--no-eslintrc', '--config', str(CONFIG.relative_to(PACKAGE_DIR)),
+         '--max-warnings', '0'] + [str(path.relative_to(PACKAGE_DIR)) for path in SCRIPTS],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=PACKAGE_DIR,
+        env=dict(os.environ, NODE_PATH=paths), timeout=120)
     assert result.returncode == 0, 'ESLint found problems:\n' + result.stdout

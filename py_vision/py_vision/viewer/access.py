@@ -21,16 +21,16 @@ answers only requests whose Host names a loopback address (a web page cannot rea
 a rebound DNS name). Anywhere else every request needs the token: ``?token=`` in the URL once
 (the page then keeps it in an HttpOnly, SameSite=Strict cookie), or an ``Authorization:
 Bearer`` header. A change must come from the page's own origin (its ``Origin`` equal to its
-``Host``), or, authenticated by the header, carry no ``Origin``. docs/panel.md explains the
-model and docs/security.md what it defends against.
+``Host``, by http or https), or, authenticated by the header, carry no ``Origin``. Nothing but
+a navigation to the page may come from another site's page (``Sec-Fetch-Site``).
+docs/panel.md explains the model and docs/security.md what it defends against.
 """
 
 from dataclasses import dataclass
 import hmac
-from http.cookies import CookieError, SimpleCookie
 import ipaddress
 import secrets
-from typing import Mapping, Optional, Tuple, Union
+from typing import Iterator, Mapping, Optional, Tuple, Union
 from urllib.parse import parse_qs
 
 from py_vision.web_token import good_token, TOKEN_RULE
@@ -56,6 +56,22 @@ def is_loopback(host: str) -> bool:
         return ipaddress.ip_address(host.strip('[]')).is_loopback
     except ValueError:
         return False
+
+
+def cookie_values(header: str, name: str) -> Iterator[str]:
+    """
+    Yield the values of the cookies called name in a Cookie header.
+
+    Read leniently, as browsers write it: the other cookies, those of any other web
+    application on the same host name, may hold anything (spaces, no '=', quotes).
+    """
+    for part in header.split(';'):
+        key, equals, value = part.partition('=')
+        if equals and key.strip() == name:
+            value = value.strip()
+            if len(value) >= 2 and value[0] == value[-1] == '"':
+                value = value[1:-1]
+            yield value
 
 
 def host_name(host_header: str) -> str:
@@ -130,13 +146,9 @@ class Access:
         if authorization[:7].lower() == 'bearer ':
             if self.check_token(authorization[7:].strip()):
                 return BEARER
-        else:
-            try:
-                morsel = SimpleCookie(headers.get('Cookie', '')).get(self.cookie_name)
-            except CookieError:
-                morsel = None
-            if morsel is not None and self.check_token(morsel.value):
-                return COOKIE
+        elif any(self.check_token(value) for value in cookie_values(
+                headers.get('Cookie', ''), self.cookie_name)):
+            return COOKIE
         return Refusal(401, 'this viewer needs its token: open the URL the node logged at its '
                        'start (http://...?token=...), or send "Authorization: Bearer <token>"',
                        (('WWW-Authenticate', 'Bearer realm="py_vision"'),))
@@ -145,10 +157,31 @@ class Access:
     def change_refusal(how: str, headers: Mapping[str, str]) -> Optional[Refusal]:
         """Return why a change (a POST) authenticated as how is refused, or None."""
         # A cross-site page can make a browser send a POST with the cookie, never with the
-        # header, and never with a forged Origin: the Origin must be the page's own.
+        # header, and never with a forged Origin: the Origin must be the page's own. Behind a
+        # proxy that speaks HTTPS to the browser and passes Host on, that is https://<Host>.
         origin = headers.get('Origin')
-        own = 'http://%s' % headers.get('Host', '')
-        if (origin is not None and origin != own) or (origin is None and how == COOKIE):
+        host = headers.get('Host', '')
+        own = ('http://' + host, 'https://' + host)
+        if (origin is not None and origin not in own) or (origin is None and how == COOKIE):
             return Refusal(403, "a change must come from the viewer's own page (Origin %s, "
-                           'expected %s)' % (origin or 'missing', own))
+                           'expected %s)' % (origin or 'missing', ' or '.join(own)))
         return None
+
+    @staticmethod
+    def site_refusal(page: bool, headers: Mapping[str, str]) -> Optional[Refusal]:
+        """
+        Return why a request from another site's page is refused, or None.
+
+        Browsers say where a request comes from (Sec-Fetch-Site); other clients send nothing.
+        A link on another site may open a page (a navigation); nothing else of the viewer may
+        be used by another site: its stream and snapshot shown in that site's page (which would
+        also take the video clients' places), its API called from there.
+        """
+        site = headers.get('Sec-Fetch-Site')
+        if site in (None, 'same-origin', 'none'):
+            return None
+        if page and headers.get('Sec-Fetch-Mode') == 'navigate' and headers.get(
+                'Sec-Fetch-Dest') == 'document':
+            return None
+        return Refusal(403, 'another site (Sec-Fetch-Site: %s) cannot use this viewer: open it '
+                       'at its own address' % site[:40])

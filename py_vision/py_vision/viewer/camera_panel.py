@@ -32,6 +32,7 @@ answer with a bounded timeout. It implements camera_access.CameraAccess.
 import collections
 import concurrent.futures
 import math
+import re
 import threading
 import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
@@ -232,6 +233,7 @@ class CameraPanel:
         self._lock = threading.Lock()  # guards what the HTTP threads read: the state below
         self._publisher: Optional[str] = None
         self._publishers: List[str] = []
+        self._namesakes = 1   # how many nodes in the graph bear the camera's node's name
         self._controls: Dict[str, Dict[str, Any]] = {}  # name -> control_json()
         self._info: Dict[str, Any] = {}
         self._loaded = False
@@ -263,6 +265,7 @@ class CameraPanel:
         """Return what the camera is and its controls (GET /camera)."""
         with self._lock:
             publisher, publishers, via = self._publisher, list(self._publishers), self._via
+            namesakes = self._namesakes
             controls = {name: dict(c) for name, c in self._controls.items()}
             info, loaded, problem = dict(self._info), self._loaded, self._problem
             diagnostics = self._diagnostics
@@ -287,6 +290,8 @@ class CameraPanel:
             message = ('%d nodes publish %s (%s): this is %s. %s' % (
                 len(publishers), self._topic, ', '.join(publishers), publishers[0],
                 message)).strip()
+        if namesakes > 1 and publisher is not None:
+            message = ('%s. %s' % (_namesakes_problem(publisher, namesakes), message)).strip()
         pixel_format = values.get('pixel format')
         if pixel_format is None and info.get('pixel_format') not in (None, 'auto'):
             pixel_format = '%s (requested)' % info['pixel_format']
@@ -308,8 +313,11 @@ class CameraPanel:
         with self._lock:
             publisher, loaded = self._publisher, self._loaded
             controls = dict(self._controls)
+            namesakes = self._namesakes
         if publisher is None:
             raise CameraError(503, 'no node publishes %s' % self._topic)
+        if namesakes > 1:
+            raise CameraError(409, _namesakes_problem(publisher, namesakes))
         if not loaded:
             raise CameraError(503, 'still reading the controls of %s; try again' % publisher)
         unknown = sorted(name for name in values if name not in controls)
@@ -317,7 +325,10 @@ class CameraPanel:
             raise CameraError(400, 'unknown control%s %s; %s has: %s' % (
                 's' if len(unknown) > 1 else '', ', '.join(map(_json_text, unknown)),
                 publisher, ', '.join(controls) or 'none'))
-        names = list(values)
+        # An automatic mode before the controls it holds: set the other way round, a control
+        # held now would be refused although the same request releases it.
+        names = sorted(values, key=lambda name: not any(
+            _holds(controls, name, other) for other in values if other != name))
         parameters = [
             ParameterMsg(name=name, value=parameter_value(name, controls[name], values[name]))
             for name in names]
@@ -432,8 +443,18 @@ class CameraPanel:
                 self._publisher = publisher
                 self._controls, self._info, self._loaded, self._problem = {}, {}, False, ''
                 self._diagnostics = None
+        namesakes = 1
+        if publisher is not None:
+            # Nodes that share a name share its parameter services: what the panel reads may
+            # come from either, and a change reaches both.
+            namesakes = sum(self._full_name(namespace, name) == publisher
+                            for name, namespace in self._node.get_node_names_and_namespaces())
         with self._lock:
             self._publishers = publishers
+            if namesakes > 1 and self._namesakes <= 1:
+                self._node.get_logger().warning('camera panel: %s' % _namesakes_problem(
+                    publisher, namesakes))
+            self._namesakes = namesakes
         if self._calls is None:
             return
         self._calls.expire()
@@ -546,6 +567,22 @@ class CameraPanel:
                 values[_STATUS] = '%s: %s' % (_LEVELS.get(level, level), status.message)
                 with self._lock:
                     self._diagnostics = (self._clock(), values)
+
+
+def _namesakes_problem(publisher: str, count: int) -> str:
+    return ('%d nodes are named %s: the panel cannot tell them apart and a change would reach '
+            'all of them; give each its own name (--ros-args -r __node:=<name>)' % (
+                count, publisher))
+
+
+def _holds(controls: Dict[str, Dict[str, Any]], owner: str, name: str) -> bool:
+    """Return True when control `name` is inactive now because of control `owner`."""
+    def real(control_name):
+        control = controls.get(control_name)
+        return (control.get('alias_of') or control_name) if control else control_name
+    held = controls.get(real(name))
+    return bool(held and held.get('inactive') and re.match(
+        r'while %s\b' % re.escape(real(owner)), held['inactive']))
 
 
 def _number(text):

@@ -28,6 +28,7 @@ import os
 import socket
 import sys
 import threading
+import time
 
 import cv2
 import numpy as np
@@ -122,15 +123,31 @@ class Display:
             if camera_topic is not None:
                 from py_vision.viewer.camera_panel import CameraPanel
                 self.viewer.set_camera(CameraPanel(node, camera_topic))
-            # Once the page is complete; the only place the token is ever written.
-            self._logger.info('browser viewer at %s%s' % (self.viewer.url, (
-                ' (needs this token: whoever has the URL can watch and tune the camera)'
-                if self.viewer.token else '')))
+            # Once the page is complete.
+            if self.viewer.token:
+                self._say_url_with_token()
+            else:
+                self._logger.info('browser viewer at %s' % self.viewer.url)
         if self.window_title is not None:
             # The window repaints and answers its close button also when no frame arrives.
             node.create_timer(WINDOW_EVENTS_PERIOD_S, lambda: cv2.waitKey(1))
         # Pictures decoded on the decoder's thread are shown on the executor's, as all others.
         self._wake = node.create_guard_condition(self._show_decoded)
+
+    def _say_url_with_token(self):
+        """
+        Write the URL with the token on this console only: the one place it is ever written.
+
+        The node's log goes to /rosout too (where every member of the ROS domain, late joiners
+        included, reads it) and to its log file: there the line leaves the token out.
+        """
+        url = self.viewer.url
+        sys.stderr.write('[INFO] [%.9f] [%s]: browser viewer at %s (needs this token: whoever '
+                         'has the URL can watch and tune the camera)\n' % (
+                             time.time(), self._logger.name, url))
+        sys.stderr.flush()
+        self._logger.info('browser viewer on %s with a token: the URL to open is printed on '
+                          'the console only' % url.split('?', 1)[0])
 
     @property
     def active(self):

@@ -25,23 +25,27 @@ instead of slowing the producer or the other clients. The number of video client
 connections is bounded; further ones get a short 503 answer.
 """
 
+import collections
 from dataclasses import dataclass
 import errno
 import html
 from http.server import BaseHTTPRequestHandler, HTTPServer
 from importlib import resources
 import io
+import ipaddress
 import json
 import logging
 import math
 import select
 import socket
 from socketserver import ThreadingMixIn
+import sys
 import threading
 import time
 from typing import Callable, Dict, Optional, Tuple
 
 import numpy as np
+from py_vision.throttled_log import ThrottledLog
 from py_vision.viewer.access import Access, Refusal
 from py_vision.viewer.camera_access import CameraAccess, CameraError
 from py_vision.viewer.frames import FrameStore
@@ -50,15 +54,21 @@ from py_vision.viewer.video import frame, VideoStore
 _BOUNDARY = 'py_vision_frame'
 # A client that accepts no data for this long (it vanished or stalled) is dropped.
 _SOCKET_TIMEOUT = 10.0
-# A request (line, headers and body) must have arrived whole this long after the connection:
-# a client sending it a byte at a time cannot hold one of the few connections.
+# A request's line and headers must have arrived this long after its connection opened (a
+# browser sends them at once); only then is the token checked. The body, of a request that
+# passed the check, must have arrived whole this long after the connection opened.
+_HEAD_TIME = 2.0
 _REQUEST_TIME = 10.0
 # How often an idle stream thread checks that its client is still there.
 _IDLE_CHECK = 1.0
 # Short requests (the page, /stats, snapshots) beyond the video clients: enough for every
 # tab's stats poll, small enough to bound the threads a misbehaving client can make us start.
 _EXTRA_CONNECTIONS = 16
-_WILDCARD_HOSTS = ('', '0.0.0.0', '::')
+# Connections whose request has not arrived and passed the access check yet: at most this
+# many from one address, and this many in all. They never take the places of the requests
+# that passed it, so clients without the token cannot starve one with it.
+_PENDING_PER_ADDRESS = 8
+_PENDING = 32
 # The largest request body taken (a POST of controls is a few hundred bytes).
 MAX_BODY = 16384
 # A snapshot asked for keeps a video stream decoded here this long (the next one is ready).
@@ -76,24 +86,6 @@ class WebViewerError(Exception):
     """The viewer cannot serve (the address is in use or unusable); the message says why."""
 
 
-class ThrottledLog:
-    """One message per key and period at most, so a flood of events cannot flood the log."""
-
-    def __init__(self, logger, period=5.0):
-        self._logger = logger
-        self._period = period
-        self._last = {}
-        self._lock = threading.Lock()
-
-    def __call__(self, level, key, message):
-        now = time.monotonic()
-        with self._lock:
-            if now - self._last.get(key, -math.inf) < self._period:
-                return
-            self._last[key] = now
-        getattr(self._logger, level)(message)
-
-
 def _json_safe(value):
     """Return value with numpy scalars made plain and non-finite floats made null."""
     if isinstance(value, dict):
@@ -109,6 +101,29 @@ def _json_safe(value):
     return str(value)
 
 
+def _text_problem(text: str) -> str:
+    try:
+        text.encode('utf-8')
+    except UnicodeEncodeError:
+        return '%s is not text (it holds a lone UTF-16 surrogate)' % ascii(text)[:40]
+    return ''
+
+
+def _controls_problem(values) -> str:
+    """Return why a parsed POST body is not an object of control name: value ('' if it is)."""
+    if not isinstance(values, dict) or not values:
+        return 'the body must be a JSON object of control name: value, e.g. {"brightness": 10}'
+    for name, value in values.items():
+        problem = _text_problem(name)
+        if not problem and isinstance(value, str):
+            problem = _text_problem(value)
+        elif not problem and not isinstance(value, (bool, int, float)):
+            problem = 'the value of %s must be a number, a string, true or false' % name
+        if problem:
+            return problem
+    return ''
+
+
 def page_files(title: str) -> Dict[str, Tuple[str, bytes]]:
     """Return route: (content type, bytes) of the page's files, the title written in."""
     folder = resources.files('py_vision.viewer').joinpath('page')
@@ -120,29 +135,60 @@ def page_files(title: str) -> Dict[str, Tuple[str, bytes]]:
 
 
 class Connections:
-    """The connections a viewer holds and its video clients, each bounded."""
+    """
+    The connections a viewer holds, each kind bounded.
+
+    Pending ones (per address and in all), and those whose request passed the access check,
+    video clients among them. A new connection is pending until its request has arrived and
+    passed the check (`trust`). When the pending places are all taken, the address holding the
+    most gives up its oldest, so that one address, or a few, flooding the viewer cannot keep
+    out a client from another.
+    """
 
     def __init__(self, max_clients: int):
         if not 1 <= int(max_clients):
             raise ValueError('max_clients must be at least 1, got %r' % max_clients)
         self.max_clients = int(max_clients)
         self._lock = threading.Lock()
-        self._open = set()
+        self._pending: Dict[socket.socket, str] = {}   # connection: address, oldest first
+        self._trusted = set()
         self._streams = 0
         self._closing = False
 
-    def add(self, connection) -> bool:
-        """Count a new connection in; False when there are too many (or the viewer closes)."""
+    def add(self, connection: socket.socket, address: str) -> bool:
+        """Count a new connection in as pending; False when it is refused."""
+        evicted = None
         with self._lock:
-            if self._closing or len(self._open) >= self.max_clients + _EXTRA_CONNECTIONS:
+            if self._closing:
                 return False
-            self._open.add(connection)
+            held = collections.Counter(self._pending.values())
+            if held[address] >= _PENDING_PER_ADDRESS:
+                return False
+            if len(self._pending) >= _PENDING:
+                greedy, most = held.most_common(1)[0]
+                if most <= held[address] + 1:
+                    return False
+                evicted = next(c for c, a in self._pending.items() if a == greedy)
+                del self._pending[evicted]
+            self._pending[connection] = address
+        if evicted is not None:
+            _shut(evicted)  # its thread sees the end of its request and closes it
+        return True
+
+    def trust(self, connection: socket.socket) -> bool:
+        """Count a connection whose request passed the access check; False when too many."""
+        with self._lock:
+            self._pending.pop(connection, None)
+            if len(self._trusted) >= self.max_clients + _EXTRA_CONNECTIONS:
+                return False
+            self._trusted.add(connection)
             return True
 
-    def remove(self, connection) -> None:
+    def remove(self, connection: socket.socket) -> None:
         """Count a connection out."""
         with self._lock:
-            self._open.discard(connection)
+            self._pending.pop(connection, None)
+            self._trusted.discard(connection)
 
     def take_stream(self) -> bool:
         """Take a video client's place; False when all are taken."""
@@ -167,12 +213,16 @@ class Connections:
         """Refuse new connections and shut the open ones down."""
         with self._lock:
             self._closing = True
-            connections = list(self._open)
+            connections = list(self._pending) + list(self._trusted)
         for connection in connections:
-            try:
-                connection.shutdown(socket.SHUT_RDWR)
-            except OSError:
-                pass
+            _shut(connection)
+
+
+def _shut(connection: socket.socket) -> None:
+    try:
+        connection.shutdown(socket.SHUT_RDWR)
+    except OSError:
+        pass
 
 
 class _Server(ThreadingMixIn, HTTPServer):
@@ -194,7 +244,7 @@ class _Server(ThreadingMixIn, HTTPServer):
         self.server_name, self.server_port = self.server_address[:2]
 
     def process_request(self, request, client_address):
-        if not self.viewer.connections.add(request):
+        if not self.viewer.connections.add(request, client_address[0]):
             try:
                 request.setblocking(False)
                 request.send(b'HTTP/1.1 503 Service Unavailable\r\nContent-Length: 0\r\n'
@@ -210,8 +260,10 @@ class _Server(ThreadingMixIn, HTTPServer):
         super().shutdown_request(request)
 
     def handle_error(self, request, client_address):
-        self.viewer.log('warning', 'handler', 'viewer: a request from %s failed and was '
-                        'dropped' % (client_address[0],))
+        if isinstance(sys.exc_info()[1], OSError):
+            return  # the client went away (reset, broken pipe) or was dropped for another
+        self.viewer.log.warning('handler', 'viewer: a request from %s failed and was dropped'
+                                % (client_address[0],))
 
 
 class _RequestReader(io.RawIOBase):
@@ -220,15 +272,15 @@ class _RequestReader(io.RawIOBase):
     def __init__(self, connection: socket.socket, deadline: float):
         super().__init__()
         self._connection = connection
-        self._deadline = deadline
+        self.deadline = deadline  # time.monotonic() by which the request must have arrived
 
     def readable(self) -> bool:
         return True
 
     def readinto(self, buffer) -> int:
-        left = self._deadline - time.monotonic()
+        left = self.deadline - time.monotonic()
         if left <= 0:
-            raise TimeoutError('the request did not arrive within %g s' % _REQUEST_TIME)
+            raise TimeoutError('the request did not arrive in time')
         # The socket's own timeout stays what the answer is written with.
         self._connection.settimeout(min(left, _SOCKET_TIMEOUT))
         try:
@@ -247,8 +299,9 @@ class _Handler(BaseHTTPRequestHandler):
         super().setup()
         # http.server reads the request line, the headers and the body through rfile: a
         # timeout there ends the connection quietly (handle_one_request).
-        self.rfile = io.BufferedReader(
-            _RequestReader(self.connection, time.monotonic() + _REQUEST_TIME))
+        self._opened = time.monotonic()
+        self._reader = _RequestReader(self.connection, self._opened + _HEAD_TIME)
+        self.rfile = io.BufferedReader(self._reader)
 
     def version_string(self):
         return 'py_vision'
@@ -264,16 +317,22 @@ class _Handler(BaseHTTPRequestHandler):
     def _dispatch(self):
         viewer = self.server.viewer
         route, query = self._target()
+        served = ROUTES.get(route)
         how = viewer.access.authenticate(self.command, route, query, self.headers)
         if isinstance(how, Refusal):
             self._refuse(how)
             return
-        if self.command == 'POST':
+        refusal = viewer.access.site_refusal(served is not None and served.page, self.headers)
+        if refusal is None and self.command == 'POST':
             refusal = viewer.access.change_refusal(how, self.headers)
-            if refusal is not None:
-                self._refuse(refusal)
-                return
-        served = ROUTES.get(route)
+        if refusal is not None:
+            self._refuse(refusal)
+            return
+        if not viewer.connections.trust(self.connection):
+            self._send(503, 'text/plain; charset=utf-8', b'Too many requests at once; retry.\n',
+                       [('Retry-After', '1')])
+            return
+        self._reader.deadline = self._opened + _REQUEST_TIME  # for the body
         if served is None:
             self._send(404, 'text/plain; charset=utf-8', b'Not found.\n')
         elif self.command not in served.methods:
@@ -320,7 +379,7 @@ class _Handler(BaseHTTPRequestHandler):
             self._fail(error.status, str(error))
             return
         except Exception as error:  # a defect: say so, and keep serving
-            viewer.log('error', 'camera', 'viewer: setting controls failed: %s: %s' % (
+            viewer.log.error('camera', 'viewer: setting controls failed: %s: %s' % (
                 type(error).__name__, error))
             self._fail(500, 'setting the controls failed: %s' % type(error).__name__)
             return
@@ -330,9 +389,9 @@ class _Handler(BaseHTTPRequestHandler):
         viewer = self.server.viewer
         connections = viewer.connections
         if not connections.take_stream():
-            viewer.log('warning', 'refused', 'viewer: refused a video client from %s, %d are '
-                       'watching (the limit)' % (self.client_address[0],
-                                                 connections.max_clients))
+            viewer.log.warning('refused', 'viewer: refused a video client from %s, %d are '
+                               'watching (the limit)' % (self.client_address[0],
+                                                         connections.max_clients))
             self._send(503, 'text/plain; charset=utf-8',
                        b'Too many viewers are connected; close one and reload.\n',
                        [('Retry-After', '5')])
@@ -426,9 +485,13 @@ class _Handler(BaseHTTPRequestHandler):
         except (UnicodeDecodeError, ValueError) as error:
             self._fail(400, 'the body is not JSON: %s' % error)
             return None
-        if not isinstance(values, dict) or not values:
-            self._fail(400, 'the body must be a JSON object of control name: value, '
-                       'e.g. {"brightness": 10}')
+        except RecursionError:
+            self._fail(400, 'the body is not a JSON object of control name: value: it nests '
+                       'too deep')
+            return None
+        problem = _controls_problem(values)
+        if problem:
+            self._fail(400, problem)
             return None
         return values
 
@@ -459,9 +522,11 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header('Content-Type', content_type)
         self.send_header('Cache-Control', 'no-store')
         self.send_header('X-Content-Type-Options', 'nosniff')
-        # No other page may frame this one (and trick its user into moving the controls).
+        # No other page may frame this one (and trick its user into moving the controls), nor
+        # show its video or snapshot in itself.
         self.send_header('X-Frame-Options', 'DENY')
         self.send_header('Content-Security-Policy', _POLICY)
+        self.send_header('Cross-Origin-Resource-Policy', 'same-origin')
         self.send_header('Connection', 'close')
         for name, value in extra:
             self.send_header(name, value)
@@ -486,17 +551,24 @@ class _Handler(BaseHTTPRequestHandler):
 
 @dataclass(frozen=True)
 class Route:
-    """One address the viewer serves: the methods it takes, and what answers them."""
+    """
+    One address the viewer serves: the methods it takes, and what answers them.
+
+    page: a page that a link on another site may open (a navigation); nothing else of the
+    viewer may be used by another site's page (Sec-Fetch-Site).
+    """
 
     methods: Tuple[str, ...]
     serve: Callable[[_Handler, str], None]
     what: str
+    page: bool = False
 
 
 _READ = ('GET', 'HEAD')
 # Every address the viewer answers; anything else is 404 (no file is served from disk).
 ROUTES: Dict[str, Route] = {
-    '/': Route(_READ, _Handler.serve_page, 'the page: the live video, the stats, the panel'),
+    '/': Route(_READ, _Handler.serve_page, 'the page: the live video, the stats, the panel',
+               page=True),
     '/viewer.js': Route(_READ, _Handler.serve_page, "the page's script"),
     '/viewer.css': Route(_READ, _Handler.serve_page, "the page's style"),
     '/stream': Route(_READ, _Handler.serve_stream,
@@ -584,9 +656,15 @@ class WebViewer:
         """
         Return the address to open in a browser, with the token when one is needed.
 
-        The host name when bound to all interfaces.
+        The host name when bound to all interfaces (0.0.0.0, ::, or what the socket layer takes
+        for them, such as 0).
         """
-        host = socket.gethostname() if self.host in _WILDCARD_HOSTS else self.host
+        bound = self._server.server_address[0] if self._server else self.host
+        try:
+            everywhere = bound == '' or ipaddress.ip_address(bound).is_unspecified
+        except ValueError:
+            everywhere = False
+        host = socket.gethostname() if everywhere else self.host
         if ':' in host:
             host = '[%s]' % host
         url = 'http://%s:%d/' % (host, self.port)

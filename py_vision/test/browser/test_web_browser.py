@@ -182,3 +182,50 @@ def test_moving_a_camera_control_in_the_panel_changes_the_stream(launch, peer, b
     assert not page.locator('#control-auto_exposure .value').is_visible()
     line = page.locator('#control-brightness label').bounding_box()['height']
     assert page.locator('#control-auto_exposure label').bounding_box()['height'] == line
+
+
+def test_controls_named_as_javascript_object_properties_work(launch, peer, browser):
+    # The page keys controls by the names the camera's node gives them: names such as
+    # constructor, toString or __proto__ are controls like any other (issue 28).
+    from rcl_interfaces.msg import IntegerRange, ParameterDescriptor
+    from sensor_msgs.msg import Image
+    import rclpy
+    names = ('constructor', 'toString', '__proto__', 'hasOwnProperty')
+    node = rclpy.create_node('odd_camera', context=peer.context)
+    try:
+        peer.executor.add_node(node)
+        node.create_publisher(Image, 'usb_camera/image', 10)
+        for name in names:
+            node.declare_parameter(name, 3, ParameterDescriptor(
+                additional_constraints='camera control', integer_range=[
+                    IntegerRange(from_value=0, to_value=10, step=1)]))
+        subscriber = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0})
+        url = subscriber.wait_for_output(URL_LINE).group(1)
+        page = browser.new_page()
+        posts = []
+        page.on('request', lambda request: posts.append(request.post_data)
+                if request.method == 'POST' else None)
+        page.goto(url, wait_until='domcontentloaded')   # no frames: the video never loads
+        errors = []
+        page.on('pageerror', lambda error: errors.append(str(error)))
+        try:
+            for name in names:
+                page.locator('#input-' + name).wait_for(state='attached', timeout=30000)
+        except Exception:
+            raise AssertionError('the controls are not all shown: %r; page errors: %s; %s' % (
+                page.locator('#panel').inner_text(), errors, page.evaluate(
+                    'async () => (await fetch("/camera")).text()')))
+        assert page.locator('#controls .control').count() == len(names)
+        for value, name in enumerate(names, start=5):
+            posts.clear()
+            page.locator('#input-' + name).evaluate(
+                '(e, v) => { e.value = String(v); e.dispatchEvent(new Event("input")); }', value)
+            wait_until(lambda: node.get_parameter(name).value == value, 10, interval=0.1,
+                       what='%s set to %d from the page' % (name, value))
+            wait_until(lambda: page.locator('#control-%s .value' % name).inner_text() ==
+                       str(value), 10, interval=0.1, what='the page to show %s' % name)
+            assert posts == ['{"%s":%d}' % (name, value)], posts[:5]
+        assert subscriber.proc.poll() is None and 'Traceback' not in subscriber.output()
+    finally:
+        peer.executor.remove_node(node)
+        node.destroy_node()

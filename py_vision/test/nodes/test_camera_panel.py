@@ -553,6 +553,13 @@ class GraphNode:
     def get_publishers_info_by_topic(self, topic):
         return self.infos
 
+    def get_node_names_and_namespaces(self):
+        return [(info.node_name, info.node_namespace) for info in self.infos]
+
+    def get_logger(self):
+        import logging
+        return logging.getLogger('graph_node')
+
     def create_client(self, kind, name):
         from concurrent.futures import Future
         from types import SimpleNamespace
@@ -642,3 +649,86 @@ def test_a_set_answered_with_the_wrong_number_of_results_is_a_502():
         panel.set_controls({'brightness': 5})
     assert refused.value.status == 502
     assert 'answered 0 result(s) for 1 parameter(s)' in str(refused.value)
+
+
+def test_two_nodes_with_the_camera_s_name_are_said_and_not_changed():
+    # Two publishers started with the same node name: the panel would read one and the other
+    # at random (device from one, format from the other), and a change would reach both.
+    from types import SimpleNamespace
+    from rcl_interfaces.msg import IntegerRange, ParameterDescriptor, ParameterValue
+    from py_vision.viewer.camera_access import CameraError
+    from py_vision.viewer.camera_panel import CameraPanel
+    import pytest
+    node = GraphNode()
+    node.infos = [node_info('usbcam_publisher'), node_info('usbcam_publisher')]
+    brightness = ParameterDescriptor(
+        name='brightness', type=2, additional_constraints=CONTROL_MARK,
+        integer_range=[IntegerRange(from_value=-64, to_value=64, step=1)])
+    node.answers = {
+        'list_parameters': lambda request: SimpleNamespace(
+            result=SimpleNamespace(names=['brightness'])),
+        'describe_parameters': lambda request: SimpleNamespace(descriptors=[brightness]),
+        'get_parameters': lambda request: SimpleNamespace(
+            values=[ParameterValue(type=2, integer_value=0)])}
+    panel = CameraPanel(node, '/usb_camera/image')
+    panel._refresh()
+    assert '2 nodes are named /usbcam_publisher' in panel.describe()['message']
+    with pytest.raises(CameraError) as refused:
+        panel.set_controls({'brightness': 5})
+    assert refused.value.status == 409
+    assert not [sent for sent in node.sent if sent[0] == 'set_parameters']
+    node.infos.pop()   # one of them renamed or stopped
+    panel._refresh()
+    assert 'are named' not in panel.describe()['message']
+
+
+def test_a_batch_sets_the_automatic_mode_before_the_controls_it_holds(launch, peer):
+    # Exposure time is held by the automatic exposure; one request switching to manual and
+    # setting the time must do both, whichever order its keys come in.
+    launch('usbcam_publisher', params={'video_device': 'synthetic', 'framerate': 15.0})
+    subscriber, port, _ = start_viewer(launch)
+    wait_until(lambda: 'exposure_time_absolute' in camera(port)['controls'], 30, interval=0.2,
+               what='the exposure controls')
+    menu = camera(port)['controls']['auto_exposure']['menu']
+    manual = next(entry['value'] for entry in menu if 'Manual' in entry['label'])
+    automatic = next(entry['value'] for entry in menu if 'Manual' not in entry['label'])
+    assert post(port, {'auto_exposure': automatic})[2]['results']['auto_exposure']['applied']
+    wait_until(lambda: camera(port)['controls']['exposure_time_absolute']['inactive'], 10,
+               interval=0.2, what='the exposure time held by the automatic mode')
+    bounds = camera(port)['controls']['exposure_time_absolute']
+    wanted = bounds['min'] + bounds['step']
+    status, _, answer = post(port, json.dumps({'exposure_time_absolute': wanted,
+                                               'auto_exposure': manual}).encode())
+    assert status == 200, answer
+    assert answer['results'] == {'exposure_time_absolute': {'applied': True, 'reason': ''},
+                                 'auto_exposure': {'applied': True, 'reason': ''}}
+    assert value_of(get_parameters(peer, PUBLISHER, ['exposure_time_absolute'])[0]) == wanted
+    assert 'Traceback' not in subscriber.output()
+
+
+def test_a_string_that_is_not_text_is_refused_and_the_viewer_lives(launch, peer):
+    # JSON can carry a lone UTF-16 surrogate, which no ROS string can hold: sent on as a
+    # string control's value it ended the viewer's node (issue 28).
+    from rcl_interfaces.msg import ParameterDescriptor
+    from sensor_msgs.msg import Image
+    import rclpy
+    node = rclpy.create_node('text_camera', context=peer.context)
+    try:
+        peer.executor.add_node(node)
+        node.create_publisher(Image, 'usb_camera/image', 10)
+        node.declare_parameter('str_ctl', 'plain', ParameterDescriptor(
+            additional_constraints=CONTROL_MARK + ', string'))
+        subscriber, port, _ = start_viewer(launch)
+        wait_until(lambda: 'str_ctl' in camera(port)['controls'], 30, interval=0.2,
+                   what='the string control')
+        for body in (b'{"str_ctl": "\\ud800"}', b'{"str_ctl": "a\\udfffb"}',
+                     b'{"\\ud800": "x"}'):
+            status, _, answer = post(port, body)
+            assert status == 400 and 'not text' in answer['error'], (body, status, answer)
+        status, _, answer = post(port, {'str_ctl': 'caf\u00e9 \u2713'})
+        assert status == 200 and answer['results']['str_ctl']['applied'], answer
+        assert node.get_parameter('str_ctl').value == 'caf\u00e9 \u2713'
+        assert subscriber.proc.poll() is None and 'Traceback' not in subscriber.output()
+    finally:
+        peer.executor.remove_node(node)
+        node.destroy_node()

@@ -535,3 +535,63 @@ def test_camera_info_is_never_half_old_half_new_while_set_camera_info_runs(tmp_p
         thread.join(timeout=30)
     assert not thread.is_alive()
     assert seen and set(seen) <= consistent, set(seen) - consistent
+
+
+# What is no calibration file at all: each is one CalibrationError, at once (issue 28).
+
+def read_in_time(path, seconds=10.0):
+    """Return what load_calibration(path) raised, failing when it takes longer than seconds."""
+    outcome = []
+
+    def read():
+        try:
+            load_calibration(path)
+            outcome.append(None)
+        except Exception as error:  # noqa: B902 - what it raised is the result
+            outcome.append(error)
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    reader.join(seconds)
+    assert outcome, 'reading %s did not end within %g s' % (path, seconds)
+    return outcome[0]
+
+
+@pytest.mark.parametrize('path, says', [
+    ('/dev/zero', 'not a regular file (a character device)'),
+    ('/dev/urandom', 'not a regular file (a character device)'),
+    ('/', 'not a regular file (a directory)'),
+])
+def test_a_device_or_directory_is_refused_by_its_type(path, says):
+    error = read_in_time(path)
+    assert isinstance(error, CalibrationError) and says in str(error), error
+
+
+def test_a_fifo_is_refused_without_waiting_for_a_writer(tmp_path):
+    fifo = tmp_path / 'calibration.yaml'
+    os.mkfifo(fifo)
+    error = read_in_time(str(fifo))
+    assert isinstance(error, CalibrationError) and 'a FIFO' in str(error), error
+
+
+def test_a_file_over_the_limit_is_refused_unread(tmp_path):
+    big = tmp_path / 'big.yaml'
+    with open(big, 'wb') as stream:
+        stream.truncate(calibration.MAX_FILE_BYTES + 1)   # sparse: no disk used
+    error = read_in_time(str(big))
+    assert isinstance(error, CalibrationError) and 'over 1048576 bytes' in str(error), error
+
+
+@pytest.mark.parametrize('text', ['[' * 1000, 'a: ' + '{b: ' * 1000, '- ' * 2000 + 'x'])
+def test_yaml_nested_too_deep_is_refused(tmp_path, text):
+    path = tmp_path / 'deep.yaml'
+    path.write_text(text)
+    error = read_in_time(str(path))
+    assert isinstance(error, CalibrationError) and str(path) in str(error), error
+
+
+def test_a_device_url_is_one_warning_and_uncalibrated(logger):
+    manager = CameraInfoManager('cam', 'file:///dev/zero', logger)
+    manager.load()
+    assert not manager.calibrated
+    warnings = logger.at('warning')
+    assert len(warnings) == 1 and '/dev/zero' in warnings[0], warnings

@@ -523,12 +523,12 @@ def test_a_token_given_is_required_on_loopback_too(make_viewer):
 def test_a_client_that_sends_its_request_slowly_is_dropped_and_its_slot_freed(
         make_viewer, monkeypatch):
     # A client that keeps a connection by sending its request a byte at a time (within the
-    # socket timeout each) would hold one of the few connections for ever: the request as a
-    # whole must arrive within the viewer's request time.
+    # socket timeout each) would hold one of its address's few connections for ever: the
+    # request's line and headers must arrive within the viewer's head time.
     import time
     from py_vision.viewer import server
-    monkeypatch.setattr(server, '_REQUEST_TIME', 1.0)
-    monkeypatch.setattr(server, '_EXTRA_CONNECTIONS', 0)   # one connection in all
+    monkeypatch.setattr(server, '_HEAD_TIME', 1.0)
+    monkeypatch.setattr(server, '_PENDING_PER_ADDRESS', 1)   # one connection per address
     viewer = make_viewer(max_clients=1)
     slow = connect(viewer, timeout=0.2)
     slow.sendall(b'GET / HTTP/1.1\r\n')
@@ -544,7 +544,7 @@ def test_a_client_that_sends_its_request_slowly_is_dropped_and_its_slot_freed(
             dropped = True   # reset by the viewer
     slow.close()
     assert dropped, 'a request trickling in for 8 s still holds its connection'
-    # The one connection is free again.
+    # The address's one connection is free again.
     wait_until(lambda: request(viewer, '/stats')[0] == 200, 5, interval=0.1,
                what='the connection the slow client held to be free')
 
@@ -555,3 +555,178 @@ def test_a_token_that_is_guessable_or_unsafe_in_a_url_is_refused(token):
         WebViewer(host='0.0.0.0', port=0, token=token)
     assert WebViewer(host='0.0.0.0', port=0, token='Abc-_.~0123456789').token == \
         'Abc-_.~0123456789'
+
+
+# What a neighbour on the network, or another web page in the user's browser, may send
+# (issue 28).
+
+TOKEN = 'a-token-of-16-chars'
+
+
+def ask(viewer, target, headers=(), method='GET', body=b'', source='127.0.0.1', timeout=5.0):
+    """Send one request from the address source; return (status, headers, body)."""
+    with socket.create_connection(('127.0.0.1', viewer.port), timeout=timeout,
+                                  source_address=(source, 0)) as sock:
+        head = '%s %s HTTP/1.1\r\nHost: 127.0.0.1:%d\r\n' % (method, target, viewer.port)
+        head += ''.join('%s: %s\r\n' % item for item in headers)
+        if body:
+            head += 'Content-Length: %d\r\n' % len(body)
+        sock.sendall(head.encode('utf-8', 'surrogateescape') + b'\r\n' + body)
+        data = b''
+        while True:
+            chunk = sock.recv(65536)
+            if not chunk:
+                break
+            data += chunk
+            if method != 'HEAD' and b'\r\n\r\n' in data and 'multipart' in data.decode(
+                    'latin-1').partition('\r\n\r\n')[0].lower():
+                break  # a stream: the head is enough
+    return parse_head(data)
+
+
+def test_a_malformed_cookie_of_another_app_does_not_hide_the_token(make_viewer):
+    # Another web application on the same host name sets its own cookies; a browser sends
+    # them all in one header. Some are not what Python's SimpleCookie accepts.
+    viewer = make_viewer(token=TOKEN)
+    ours = '%s=%s' % (viewer.cookie_name, TOKEN)
+    for cookie in ('theme=dark blue; ' + ours, 'junk; ' + ours, ours + '; a="b; c=d',
+                   'x=1;;' + ours, ours):
+        status, _, body = ask(viewer, '/stats', [('Cookie', cookie)])
+        assert status == 200, (cookie, body)
+    for cookie in ('theme=dark blue', '%s=%s' % (viewer.cookie_name, 'x' * 19),
+                   'py_vision_token_1=' + TOKEN):
+        assert ask(viewer, '/stats', [('Cookie', cookie)])[0] == 401, cookie
+
+
+@pytest.mark.parametrize('route', ['/stream', '/snapshot.jpg'])
+def test_another_site_cannot_embed_the_video(make_viewer, route):
+    # On loopback any page the user opens could put <img src="http://127.0.0.1:8080/stream">
+    # in its own page (and use up the video slots); browsers say where a request comes from.
+    viewer = make_viewer()
+    viewer.submit(synthetic_frame(1, W, H))
+    for site in ('cross-site', 'same-site'):
+        status, headers, body = ask(viewer, route, [('Sec-Fetch-Site', site)])
+        assert status == 403, site
+        assert 'another site' in json.loads(body)['error']
+    assert viewer.client_count == 0
+    for site in ('same-origin', 'none', None):
+        status, headers, _ = ask(viewer, route, [('Sec-Fetch-Site', site)] if site else [])
+        assert status == 200, site
+        assert headers['cross-origin-resource-policy'] == 'same-origin'
+
+
+@pytest.mark.parametrize('body', [
+    b'[' * 1100, b'{"a": ' * 1100, b'{"gain": ' + b'[' * 100000 + b'}',
+    b'{"\\ud800": 1}', b'{"gain": "\\udfff"}'])
+def test_any_json_is_answered_with_a_4xx(make_viewer, body):
+    viewer = make_viewer()
+    camera = FakeCamera()
+    viewer.set_camera(camera)
+    if len(body) > 16384:
+        body = body[:16000]
+    status, _, answer = ask(viewer, '/camera/controls', [
+        ('Content-Type', 'application/json')], 'POST', body)
+    assert 400 <= status < 500, (body[:30], status)
+    assert 'error' in json.loads(answer)
+    assert camera.received == [], 'a value no control can take reached the camera side'
+    assert ask(viewer, '/stats')[0] == 200
+
+
+def test_a_change_through_an_https_proxy_is_from_the_page_itself(make_viewer):
+    # Behind a reverse proxy that speaks HTTPS to the browser (and passes the Host on), the
+    # page's Origin is https://<Host>.
+    viewer = make_viewer(token=TOKEN)
+    viewer.set_camera(FakeCamera())
+    cookie = ('Cookie', '%s=%s' % (viewer.cookie_name, TOKEN))
+    own = 'https://127.0.0.1:%d' % viewer.port
+    json_type = ('Content-Type', 'application/json')
+    status, _, _ = ask(viewer, '/camera/controls', [cookie, json_type, ('Origin', own)],
+                       'POST', b'{"gain": 1}')
+    assert status == 200
+    for origin in ('https://evil.example', 'https://127.0.0.1:%d.evil' % viewer.port,
+                   'ftp://127.0.0.1:%d' % viewer.port, 'null'):
+        status, _, _ = ask(viewer, '/camera/controls', [cookie, json_type, ('Origin', origin)],
+                           'POST', b'{"gain": 1}')
+        assert status == 403, origin
+
+
+def test_web_host_0_is_every_interface(make_viewer):
+    # '0' is 0.0.0.0 to the socket layer: the URL names this machine, not host '0'.
+    viewer = make_viewer(host='0', token=TOKEN)
+    assert viewer.url == 'http://%s:%d/?token=%s' % (socket.gethostname(), viewer.port, TOKEN)
+
+
+class Flood:
+    """
+    Connections from one address that each send a byte and then nothing.
+
+    Each is reopened as soon as the viewer drops it: someone without the token trying to hold
+    the viewer's connections.
+    """
+
+    def __init__(self, viewer, source, connections, seconds):
+        import threading
+        import time
+        self._viewer, self._source = viewer, source
+        self._stop = time.monotonic() + seconds
+        self.opened = 0
+        self._threads = [threading.Thread(target=self._hold, daemon=True)
+                         for _ in range(connections)]
+        for thread in self._threads:
+            thread.start()
+
+    def _hold(self):
+        import time
+        while time.monotonic() < self._stop:
+            try:
+                with socket.create_connection(('127.0.0.1', self._viewer.port), timeout=1.0,
+                                              source_address=(self._source, 0)) as sock:
+                    self.opened += 1
+                    sock.sendall(b'G')
+                    while time.monotonic() < self._stop and sock.recv(1024):
+                        pass
+            except OSError:
+                time.sleep(0.05)
+
+    def join(self):
+        for thread in self._threads:
+            thread.join()
+
+
+def test_connections_without_the_token_cannot_starve_a_client_with_it(make_viewer):
+    # Measured in bench/bench_viewer_flood.py; here: every request of the client holding the
+    # token is answered while the flood goes on.
+    import time
+    viewer = make_viewer(token=TOKEN)
+    floods = [Flood(viewer, '127.0.0.%d' % n, 24, 12.0) for n in (2, 3, 4)]
+    try:
+        wait_until(lambda: sum(f.opened for f in floods) >= 72, 10, interval=0.05,
+                   what='the flood to open its connections')
+        answers = []
+        for _ in range(20):
+            try:
+                answers.append(ask(viewer, '/stats', [('Authorization', 'Bearer ' + TOKEN)],
+                                   timeout=5.0)[0])
+            except OSError as error:
+                answers.append(type(error).__name__)
+            time.sleep(0.1)
+        assert answers == [200] * 20, answers
+    finally:
+        for flood in floods:
+            flood.join()
+
+
+def test_a_viewer_that_warns_then_errs_on_an_rclpy_logger_keeps_answering(make_viewer):
+    # rclpy's loggers refuse a call site whose severity changes between calls: the viewer's
+    # warning (a refused video client) and its error (a failing camera side) must both log.
+    from rclpy.logging import get_logger
+    viewer = make_viewer(max_clients=1, logger=get_logger('test_viewer'))
+    viewer.set_camera(FakeCamera(fail=KeyError('boom')))
+    watching = StreamClient(viewer)
+    assert watching.read_head() == 200
+    assert request(viewer, '/stream')[0] == 503   # a warning
+    status, answer = post_json(viewer, b'{"gain": 1}')   # an error
+    assert status == 500 and 'KeyError' in answer['error']
+    status, answer = post_json(viewer, b'{"gain": 1}')
+    assert status == 500
+    watching.close()

@@ -171,13 +171,16 @@
 
   // The camera panel: what the camera is and its controls, from GET /camera once a second
   // (a change made elsewhere shows within a second); a change is sent at once, and while a
-  // slider moves at most one request per control is on its way.
+  // slider moves at most one request per control is on its way. Controls are keyed by the
+  // names the camera's node gives them, in Maps: a control may be called "constructor" or
+  // "__proto__", which a plain object would take for its own machinery.
   const panel = document.getElementById("panel");
   const controlsBox = document.getElementById("controls");
   let layout = null;
-  const widgets = {};
-  const busy = {};
-  const queued = {};
+  const widgets = new Map();   // name: the control's elements
+  const held = new Set();      // names of the controls the user is moving now
+  const queued = new Map();    // name: the value to send next
+  const sending = new Set();   // names with a request on its way
 
   function describeValue(c, value) {
     if (value === null || value === undefined) { return "camera\u2019s own value"; }
@@ -241,7 +244,7 @@
     input.name = name;
     input.disabled = c.read_only;
     label.htmlFor = input.id = "input-" + name;
-    input.addEventListener("pointerdown", function () { busy[name] = true; });
+    input.addEventListener("pointerdown", function () { held.add(name); });
     const changed = c.button ? "click" : (input.type === "range" ? "input" : "change");
     input.addEventListener(changed, function () {
       let v;
@@ -254,7 +257,7 @@
       send(name, v);
     });
     ["change", "pointerup", "pointercancel"].forEach(function (event) {
-      input.addEventListener(event, function () { busy[name] = false; });
+      input.addEventListener(event, function () { held.delete(name); });
     });
     if (input.type === "checkbox") {
       value.appendChild(document.createTextNode(""));
@@ -265,18 +268,18 @@
     } else {
       box.append(label, value, input, why, note);
     }
-    widgets[name] = { box: box, input: input, value: value, note: note, why: why, spec: c };
+    widgets.set(name, { box: box, input: input, value: value, note: note, why: why, spec: c });
     return box;
   }
 
   function showValue(name, c) {
-    const w = widgets[name];
+    const w = widgets.get(name);
     w.spec = c;
     w.box.classList.toggle("unset", c.value === null);
     w.box.classList.toggle("inactive", Boolean(c.inactive));
     w.why.textContent = c.inactive ? "inactive " + c.inactive : "";
     w.value.textContent = describeValue(c, c.value);
-    if (busy[name] || name in queued) { return; }
+    if (held.has(name) || queued.has(name)) { return; }
     if (w.input.type === "checkbox") {
       w.input.indeterminate = c.value === null;
       w.input.checked = c.value === true;
@@ -304,55 +307,54 @@
     show("cam-rate", rates.join(", ") || "-");
     show("cam-status", info.status || "-");
     // A control under a second name (usb_cam's) is shown once, under the camera's name.
-    const all = cam.controls || {};
-    const controls = {};
-    Object.keys(all).forEach(function (n) {
-      if (!(all[n].alias_of && all[n].alias_of in all)) { controls[n] = all[n]; }
+    const all = new Map(Object.entries(cam.controls || {}));
+    const controls = new Map();
+    all.forEach(function (c, n) {
+      if (!(c.alias_of && all.has(c.alias_of))) { controls.set(n, c); }
     });
-    const key = JSON.stringify(Object.keys(controls).map(function (n) {
-      const c = controls[n];
+    const key = JSON.stringify(Array.from(controls, function ([n, c]) {
       return [n, c.type, c.min, c.max, c.step, c.menu, c.read_only, c.group, c.button];
     }));
     if (key !== layout) {
       layout = key;
       controlsBox.textContent = "";
-      Object.keys(widgets).forEach(function (n) { delete widgets[n]; });
+      widgets.clear();
       let group = null;
-      Object.keys(controls).forEach(function (n) {
-        if (controls[n].group !== group) {
-          group = controls[n].group;
+      controls.forEach(function (c, n) {
+        if (c.group !== group) {
+          group = c.group;
           const h = document.createElement("h3");
           h.textContent = group === "stream" ? "stream settings" : "controls";
           controlsBox.appendChild(h);
         }
-        controlsBox.appendChild(makeControl(n, controls[n]));
+        controlsBox.appendChild(makeControl(n, c));
       });
     }
-    Object.keys(controls).forEach(function (n) { showValue(n, controls[n]); });
+    controls.forEach(function (c, n) { showValue(n, c); });
   }
 
   async function send(name, v) {
-    queued[name] = v;
-    if (busy[name + "/sending"]) { return; }
-    busy[name + "/sending"] = true;
-    const w = widgets[name];
-    while (name in queued) {
-      const body = {};
-      body[name] = queued[name];
-      delete queued[name];
+    queued.set(name, v);
+    if (sending.has(name)) { return; }
+    sending.add(name);
+    const w = widgets.get(name);
+    while (queued.has(name)) {
+      // fromEntries makes an own property of any name ("__proto__" too).
+      const body = JSON.stringify(Object.fromEntries([[name, queued.get(name)]]));
+      queued.delete(name);
       try {
         const response = await fetch("/camera/controls", {
-          method: "POST", cache: "no-store", body: JSON.stringify(body),
+          method: "POST", cache: "no-store", body: body,
           headers: { "Content-Type": "application/json" } });
         const answer = await response.json();
-        const result = response.ok ? answer.results[name] : { applied: false,
-                                                               reason: answer.error };
+        const results = new Map(Object.entries(response.ok ? answer.results : {}));
+        const result = results.get(name) || { applied: false, reason: answer.error };
         if (w) { w.note.textContent = result.applied ? "" : "refused: " + result.reason; }
       } catch (e) {
         if (w) { w.note.textContent = "not sent: the viewer does not answer"; }
       }
     }
-    busy[name + "/sending"] = false;
+    sending.delete(name);
   }
 
   async function pollCamera() {
