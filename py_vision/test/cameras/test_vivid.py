@@ -189,11 +189,16 @@ def test_vivids_controls_are_parameters_with_its_ranges_and_menus(vivid):
 # Faults, in the VM: each pressed on the running node, which must get over it.
 
 def recovering(vm, node, frames, fault, sign):
-    """Inject fault; wait for the node's log to match sign, then for frames to flow again."""
+    """Inject fault; wait for the node to log sign once more, then for frames to flow again."""
     start = len(node.output())
+    seen = node.output().count(sign)
     before = len(frames)
     fault()
-    node.wait_for_output(sign, 120)
+    try:
+        wait_until(lambda: node.output().count(sign) > seen or node.proc.poll() is not None,
+                   120, what='%r once more in the log' % sign)
+    except AssertionError as error:
+        node.fail(str(error))
     after = len(frames)
     wait_until(lambda: len(frames) >= after + 5, 120, what='frames after %s' % sign)
     return {'log': node.output()[start:], 'frames_before': before,
