@@ -31,12 +31,14 @@ copy when the data is read-only (``bytes``) or must be byte-swapped or converted
 """
 
 import array
+import functools
 import re
 import struct
 import sys
 
 import cv2
 import numpy as np
+from py_vision.capture.pixel_formats import nv24_as_yuyv
 
 from sensor_msgs.msg import CompressedImage, Image
 from std_msgs.msg import Header
@@ -65,6 +67,8 @@ _GENERIC_NAME = re.compile(r'(8U|8S|16U|16S|32S|32F|64F)(?:C([1-9][0-9]*))?')
 
 _GRAY, _RGB, _BGR, _RGBA, _BGRA = 'GRAY', 'RGB', 'BGR', 'RGBA', 'BGRA'
 _UYVY, _YUY2 = 'YUV422', 'YUV422_YUY2'
+# Semi-planar YUV: the luma plane, then a plane of chroma pairs (rows of `step` bytes each).
+_NV21, _NV24 = 'NV21', 'NV24'
 _BAYERS = ('RGGB', 'BGGR', 'GBRG', 'GRBG')
 
 
@@ -72,9 +76,9 @@ class _Encoding:
     """What the bridge knows about one encoding string."""
 
     __slots__ = ('name', 'depth', 'dtype', 'channels', 'family', 'bits', 'cvtype_name',
-                 'cvtype', 'pixel_bytes')
+                 'cvtype', 'pixel_bytes', 'rows')
 
-    def __init__(self, name, depth, channels, family):
+    def __init__(self, name, depth, channels, family, rows=(1, 1)):
         self.name = name
         self.depth = depth
         self.dtype = np.dtype(_DEPTH_DTYPES[depth])
@@ -85,6 +89,9 @@ class _Encoding:
         self.cvtype_name = '%sC%d' % (depth, channels)
         self.cvtype = getattr(cv2, 'CV_' + depth) + ((channels - 1) << _CN_SHIFT)
         self.pixel_bytes = self.dtype.itemsize * channels
+        # Rows of data per row of picture (numerator, denominator): 3/2 for nv21, whose
+        # chroma plane has half as many rows as its luma, 3 for nv24. OpenCV's layout.
+        self.rows = rows
 
 
 def _build_encodings():
@@ -102,6 +109,8 @@ def _build_encodings():
     for name, family in (('yuv422', _UYVY), ('uyvy', _UYVY),
                          ('yuv422_yuy2', _YUY2), ('yuyv', _YUY2)):
         table[name] = _Encoding(name, '8U', 2, family)
+    table['nv21'] = _Encoding('nv21', '8U', 1, _NV21, (3, 2))
+    table['nv24'] = _Encoding('nv24', '8U', 1, _NV24, (3, 1))
     return table
 
 
@@ -110,6 +119,10 @@ _ENCODINGS = _build_encodings()
 
 def _cv_code(name):
     return getattr(cv2, 'COLOR_' + name, None)
+
+
+def _through_yuyv(code, im):
+    return cv2.cvtColor(nv24_as_yuyv(im), code)
 
 
 def _build_conversions():
@@ -122,9 +135,13 @@ def _build_conversions():
         for dst in plain:
             if src != dst:
                 codes[(src, dst)] = _cv_code('%s2%s' % (src, dst))
-    for family, suffix in ((_UYVY, 'UYVY'), (_YUY2, 'YUY2')):
+    for family, suffix in ((_UYVY, 'UYVY'), (_YUY2, 'YUY2'), (_NV21, 'NV21')):
         for dst in plain:
             codes[(family, dst)] = _cv_code('YUV2%s_%s' % (dst, suffix))
+    codes[(_NV21, _NV21)] = codes[(_NV24, _NV24)] = None
+    for dst in plain:
+        # OpenCV 4.6 has no NV24 conversion: through YUYV, its chroma halved across.
+        codes[(_NV24, dst)] = functools.partial(_through_yuyv, _cv_code('YUV2%s_YUY2' % dst))
     # OpenCV names a Bayer pattern after the 2x2 block starting at pixel (1, 1).
     opencv_names = {'RGGB': 'BG', 'BGGR': 'RG', 'GBRG': 'GR', 'GRBG': 'GB'}
     for pattern, cv_name in opencv_names.items():
@@ -187,7 +204,8 @@ def _plan(src, dst):
         if pair not in _CONVERSIONS:
             raise CvBridgeError('Unsupported conversion from [%s] to [%s]' % (src.name, dst.name))
         code = _CONVERSIONS[pair]
-        plan = (('depth', alpha),) if code is None else (('cvt', code), ('depth', alpha))
+        step = ('fn', code) if callable(code) else ('cvt', code)
+        plan = (('depth', alpha),) if code is None else (step, ('depth', alpha))
     _PLANS[key] = plan
     return plan
 
@@ -300,14 +318,14 @@ def _add_scalar(im, value):
 def _convert(im, src, dst):
     """Convert image im of encoding src to encoding dst, following cv_bridge's rules."""
     for step, value in _plan(src, dst):
-        if step == 'cvt':
-            if src.family in (_UYVY, _YUY2) and im.shape[1] % 2:
+        if step in ('cvt', 'fn'):
+            if src.family in (_UYVY, _YUY2, _NV21, _NV24) and im.shape[1] % 2:
                 # OpenCV 5 refuses this, but 4.6 converts it silently into a wrong image.
                 raise CvBridgeError('A [%s] image must have an even width to convert to [%s]: '
                                     'its pixels come in pairs that share U and V, and this '
                                     'one is %d pixels wide' % (src.name, dst.name, im.shape[1]))
             try:
-                im = cv2.cvtColor(im, value)
+                im = value(im) if step == 'fn' else cv2.cvtColor(im, value)
             except cv2.error as exc:
                 raise CvBridgeError('OpenCV cannot convert a %dx%d [%s] image to [%s]: %s' % (
                     im.shape[1], im.shape[0], src.name, dst.name,
@@ -370,14 +388,19 @@ def _image_from_msg(img_msg):
     if step % itemsize:
         raise CvBridgeError('Image is wrongly formed: step %d is not a multiple of the %d-byte '
                             'element size of [%s]' % (step, itemsize, encoding))
+    rows = _data_rows(enc, height, width)
     buf = _byte_buffer(data)
-    if buf.size != height * step:
-        raise CvBridgeError('Image is wrongly formed: data has %d bytes but height x step is '
-                            '%d x %d = %d' % (buf.size, height, step, height * step))
+    if buf.size != rows * step:
+        if rows == height:
+            raise CvBridgeError('Image is wrongly formed: data has %d bytes but height x step '
+                                'is %d x %d = %d' % (buf.size, height, step, height * step))
+        raise CvBridgeError('Image is wrongly formed: data has %d bytes but a [%s] image %d '
+                            'high has %d rows of step %d, %d bytes' % (
+                                buf.size, encoding, height, rows, step, rows * step))
     swap = itemsize > 1 and bool(is_bigendian) != _NATIVE_BIG
     dtype = enc.dtype.newbyteorder('S') if swap else enc.dtype
     if enc.channels == 1:
-        shape, strides = (height, width), (step, itemsize)
+        shape, strides = (rows, width), (step, itemsize)
     else:
         shape = (height, width, enc.channels)
         strides = (step, enc.pixel_bytes, itemsize)
@@ -388,6 +411,17 @@ def _image_from_msg(img_msg):
         # A read-only source (bytes) or an odd address: copy, so callers can draw on the image.
         im = im.copy()
     return im, enc
+
+
+def _data_rows(enc, height, width):
+    """Return the rows of data of a picture `height` rows high (more for semi-planar YUV)."""
+    numerator, denominator = enc.rows
+    if numerator == 1:
+        return height
+    if height % denominator or width % 2:
+        raise CvBridgeError('A [%s] image must have an even width and height (its chroma is '
+                            'subsampled), this one is %dx%d' % (enc.name, width, height))
+    return height * numerator // denominator
 
 
 def _array_encoding(cvim):
@@ -438,6 +472,21 @@ def fill_message_data(msg, cvim):
     if not cvim.flags.c_contiguous:
         cvim = np.ascontiguousarray(cvim)
     data.frombytes(cvim.reshape(-1).view(np.uint8))
+
+
+def share_message_data(msg, cvim):
+    """
+    Make msg.data (Image, CompressedImage) the bytes of array cvim themselves: no copy.
+
+    For a message published at once: rclpy copies the bytes into the middleware's message
+    when it publishes, from cvim's own memory (a camera's buffer, say), so the frame is copied
+    once instead of twice. cvim must stay unchanged until then. The message's field is set
+    as the generated message code reads it (any object with the buffer protocol), not through
+    its setter, which would copy it element by element.
+    """
+    if not cvim.flags.c_contiguous:
+        cvim = np.ascontiguousarray(cvim)
+    msg._data = cvim.reshape(-1).view(np.uint8)
 
 
 # --- compressed images ----------------------------------------------------------------
@@ -548,13 +597,15 @@ class CvBridge:
             return im
         return _convert(im, enc, _encoding(desired_encoding))
 
-    def cv2_to_imgmsg(self, cvim, encoding='passthrough', header=None):
+    def cv2_to_imgmsg(self, cvim, encoding='passthrough', header=None, share=False):
         """
         Convert a numpy image to a sensor_msgs/Image holding a copy of its pixels.
 
         With 'passthrough' the encoding is the array's OpenCV type ('8UC3', '16UC1', ...);
         otherwise ``encoding`` must have the array's type and channel count. ``header`` (a
-        std_msgs/Header) is copied into the message.
+        std_msgs/Header) is copied into the message. With ``share`` (not upstream's) the
+        message holds cvim's own bytes instead of a copy (`share_message_data`): for a message
+        published at once, while cvim is unchanged.
         """
         array_enc = _array_encoding(cvim)
         if encoding == 'passthrough':
@@ -569,12 +620,22 @@ class CvBridge:
         if header is not None:
             img_msg.header = _copy_header(header)
         img_msg.height, img_msg.width = int(cvim.shape[0]), int(cvim.shape[1])
+        numerator, denominator = _encoding(name).rows
+        if numerator != 1:
+            # A semi-planar image's array holds its chroma rows below its luma rows.
+            height = img_msg.height * denominator // numerator
+            if height * numerator != img_msg.height * denominator:
+                raise CvBridgeError('A [%s] array has %d rows for each %d rows of picture: %d '
+                                    'rows is not a picture' % (name, numerator, denominator,
+                                                               img_msg.height))
+            _data_rows(_encoding(name), height, img_msg.width)
+            img_msg.height = height
         img_msg.encoding = name
         byteorder = cvim.dtype.byteorder
         img_msg.is_bigendian = cvim.dtype.itemsize > 1 and (
             byteorder == '>' or (byteorder == '=' and _NATIVE_BIG))
         img_msg.step = img_msg.width * array_enc.pixel_bytes
-        fill_message_data(img_msg, cvim)
+        (share_message_data if share else fill_message_data)(img_msg, cvim)
         return img_msg
 
     def compressed_imgmsg_to_cv2(self, cmprs_img_msg, desired_encoding='passthrough'):

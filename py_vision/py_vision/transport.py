@@ -17,9 +17,10 @@ Image topics the way image_transport lays them out, in rclpy.
 
 A base topic ``T`` (after remapping) carries ``sensor_msgs/Image``; ``T/compressed`` carries
 the same frames as ``sensor_msgs/CompressedImage`` (JPEG, ``format`` as image_transport's
-compressed plugin writes it for bgr8); ``camera_info`` beside it (``<dir of T>/camera_info``)
-carries their ``CameraInfo``. `ImagePublisher` produces each form only while its topic has
-subscribers, and publishes a camera's own JPEG untouched. `subscribe()` is what an
+compressed plugin writes it for bgr8, or mono8 for a grey picture); ``camera_info`` beside it
+(``<dir of T>/camera_info``) carries their ``CameraInfo``. `ImagePublisher` produces each form
+only while its topic has subscribers, in any encoding the bridge knows, and publishes a
+camera's own JPEG untouched. `subscribe()` is what an
 image_transport subscriber's ``image_transport`` parameter (``raw`` or ``compressed``) chooses.
 
 A camera's own H.264 or HEVC goes out untouched, one access unit per message, by
@@ -34,7 +35,7 @@ from typing import Callable, Optional, Tuple
 
 import cv2
 import numpy as np
-from py_vision.cv_bridge import fill_message_data
+from py_vision.cv_bridge import fill_message_data, share_message_data
 from py_vision.params import Parameters, Spec
 from py_vision.qos import create_publisher, ImageSubscription
 from py_vision.throttled_log import ThrottledLog
@@ -53,6 +54,7 @@ MAX_IMAGE = Spec('max_image_mb', 100.0, 'largest image taken, in MB (1e6 bytes) 
                  'larger one (from any member of the ROS domain) is refused with a warning',
                  (0.001, 10000.0))
 JPEG_FORMAT = 'bgr8; jpeg compressed bgr8'
+MONO_JPEG_FORMAT = 'mono8; jpeg compressed mono8'
 _SOF_MARKERS = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}
 
 
@@ -105,6 +107,24 @@ class ImagePublisher:
             parameters, CompressedImage, compressed_topic(node, base_topic), qos)
         self.jpeg_quality = 80
         self.encoded = 0        # JPEG encodes made here (not the camera's own)
+        # The last raw message and its layout: frame after frame of one layout, only its
+        # header and data change (the bridge checked the layout once).
+        self._raw_msg, self._raw_layout = None, None
+
+    def _raw_message(self, pixels: np.ndarray, encoding: str) -> Image:
+        """
+        Return an Image of pixels holding their bytes themselves, not a copy.
+
+        It is published at once: rclpy copies the bytes (a camera's own buffer, with native)
+        into the middleware's message then.
+        """
+        layout = (pixels.shape, pixels.dtype.str, encoding)
+        if layout != self._raw_layout:
+            self._raw_msg = self._bridge.cv2_to_imgmsg(pixels, encoding, share=True)
+            self._raw_layout = layout
+        else:
+            share_message_data(self._raw_msg, pixels)
+        return self._raw_msg
 
     def wants_raw(self) -> bool:
         """Return True while the raw topic has subscribers."""
@@ -114,34 +134,40 @@ class ImagePublisher:
         """Return True while the compressed topic has subscribers."""
         return self.compressed.get_subscription_count() > 0
 
-    def publish(self, header, bgr: Callable[[], Optional[np.ndarray]],
-                jpeg: Optional[np.ndarray] = None) -> Tuple[bool, bool]:
+    def publish(self, header, image: Callable[[], Optional[np.ndarray]],
+                jpeg: Optional[np.ndarray] = None, encoding: str = 'bgr8',
+                picture: Optional[Callable[[], Optional[np.ndarray]]] = None
+                ) -> Tuple[bool, bool]:
         """
         Publish one frame with header to the topics that have subscribers.
 
-        bgr() returns the pixels (it may decode); jpeg is the camera's own JPEG, published as
-        it is. Returns (raw published, compressed published).
+        image() returns the pixels in `encoding` (it may convert or decode); jpeg is the
+        camera's own JPEG, published as it is; picture() returns the 8-bit picture (BGR, or one
+        channel for a grey one) a JPEG is encoded from when there is none (image() when not
+        given: `encoding` is bgr8 or mono8 then). Returns (raw published, compressed published).
         """
         raw_done = compressed_done = False
         if self.wants_raw() or not self._lazy_raw:
-            image = bgr()
-            if image is None:
+            pixels = image()
+            if pixels is None:
                 return False, False  # not a whole image (a JPEG that does not decode): no part
-            msg = self._bridge.cv2_to_imgmsg(image, 'bgr8')
+            msg = self._raw_message(pixels, encoding)
             msg.header = header
             self.raw.publish(msg)
             raw_done = True
         if self.wants_compressed():
+            what = JPEG_FORMAT
             if jpeg is None:
-                image = bgr()
-                if image is not None:
+                source = (picture or image)()
+                if source is not None:
                     ok, encoded = cv2.imencode(
-                        '.jpg', image, [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
+                        '.jpg', source, [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
                     jpeg = encoded if ok else None
+                    what = MONO_JPEG_FORMAT if source.ndim == 2 else JPEG_FORMAT
                     self.encoded += 1
             if jpeg is not None:
-                msg = CompressedImage(header=header, format=JPEG_FORMAT)
-                fill_message_data(msg, jpeg)
+                msg = CompressedImage(header=header, format=what)
+                share_message_data(msg, jpeg)
                 self.compressed.publish(msg)
                 compressed_done = True
         return raw_done, compressed_done

@@ -68,6 +68,7 @@ CTRL_FLAG_INACTIVE = 0x10
 CTRL_FLAG_WRITE_ONLY = 0x40
 CTRL_FLAG_HAS_PAYLOAD = 0x100
 CTRL_FLAG_EXECUTE_ON_WRITE = 0x200
+CTRL_FLAG_DYNAMIC_ARRAY = 0x800
 CTRL_FLAG_NEXT_CTRL = 0x80000000
 CTRL_FLAG_NEXT_COMPOUND = 0x40000000
 CTRL_TYPE_INTEGER, CTRL_TYPE_BOOLEAN, CTRL_TYPE_MENU, CTRL_TYPE_CTRL_CLASS = 1, 2, 3, 6
@@ -321,20 +322,27 @@ class Stream:
         events = poller.poll(int(timeout * 1000))
         return events[0][1] if events else 0
 
-    def read(self, timeout=5.0):
-        """Wait for a buffer, dequeue it, copy its bytes and queue it again: (info, bytes)."""
+    def dequeue(self, timeout=5.0):
+        """Wait for a filled buffer and take it (VIDIOC_DQBUF): its info; queue() gives it back."""
         deadline = time.monotonic() + timeout
         while True:
             try:
-                info = self._buffer(VIDIOC_DQBUF)
-                break
+                return self._buffer(VIDIOC_DQBUF)
             except BlockingIOError:
                 left = deadline - time.monotonic()
                 if left <= 0:
                     raise TimeoutError('no frame within %.1f s' % timeout)
                 self.wait(left)
+
+    def queue(self, index):
+        """Give a buffer back to the driver (VIDIOC_QBUF)."""
+        self._buffer(VIDIOC_QBUF, index)
+
+    def read(self, timeout=5.0):
+        """Wait for a buffer, dequeue it, copy its bytes and queue it again: (info, bytes)."""
+        info = self.dequeue(timeout)
         data = bytes(self.maps[info['index']][:info['bytesused']])
-        self._buffer(VIDIOC_QBUF, info['index'])
+        self.queue(info['index'])
         return info, data
 
     def close(self):

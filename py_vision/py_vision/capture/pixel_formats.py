@@ -35,7 +35,8 @@ import cv2
 import numpy as np
 
 __all__ = ['COLOUR_OUTPUTS', 'find', 'FORMATS', 'fourcc_code', 'fourcc_text', 'JPEG_FORMATS',
-           'names_accepted', 'OPENCV_BGR', 'OUTPUTS', 'PixelFormat', 'Plane', 'UVC_WEBCAM']
+           'names_accepted', 'nv24_as_yuyv', 'OPENCV_BGR', 'OUTPUTS', 'PixelFormat', 'Plane',
+           'UVC_WEBCAM']
 
 # What a frame converts to; 'native' is the camera's own pixels.
 OUTPUTS = ('bgr8', 'rgb8', 'mono8', 'mono16', 'native')
@@ -94,6 +95,11 @@ class PixelFormat:
     def code(self) -> int:
         """Return the V4L2 pixel format number: 'YUYV' -> 0x56595559."""
         return fourcc_code(self.fourcc)
+
+    @property
+    def picture(self) -> str:
+        """Return the 8-bit output that keeps what it shows (mono8, else bgr8): a JPEG's input."""
+        return 'mono8' if self.mono else 'bgr8'
 
     @property
     def bus_bytes(self) -> Optional[float]:
@@ -242,7 +248,7 @@ def _bayer(opencv_name: str) -> Dict[str, Conversion]:
             'mono8': gray, 'mono16': _then(gray, _widen)}
 
 
-def _nv24_as_yuyv(view):
+def nv24_as_yuyv(view):
     """NV24 (Y plane, then U V for every pixel) as YUYV: every other pixel's chroma."""
     height = view.shape[0] // 3
     uv = view[height:].reshape(height, -1, 2)
@@ -256,7 +262,7 @@ def _nv24_as_yuyv(view):
 def _nv24() -> Dict[str, Conversion]:
     """NV24 through YUYV: OpenCV 4.6 has no NV24 conversion (its chroma is halved across)."""
     def through_yuyv(step):
-        return lambda view: step(_nv24_as_yuyv(view))
+        return lambda view: step(nv24_as_yuyv(view))
     return {output: (CONVERT, through_yuyv(step)) for output, (_, step) in _yuv('YUYV').items()}
 
 

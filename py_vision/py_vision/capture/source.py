@@ -158,7 +158,7 @@ class Frame:
     error: bool = False                     # flagged by the driver (V4L2_BUF_FLAG_ERROR)
     corrupt: bool = False                   # not a whole image: never to be published
     decoded: bool = False                   # image() had to decode a JPEG
-    _images: Dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+    _images: Optional[Dict[str, np.ndarray]] = field(default=None, repr=False)
 
     @property
     def jpeg(self) -> Optional[np.ndarray]:
@@ -171,7 +171,10 @@ class Frame:
 
     def image(self, output: str = 'bgr8') -> Optional[np.ndarray]:
         """Return the frame as `output` (see the class's text); None if it is not a picture."""
-        image = self._images.get(output)
+        images = self._images
+        if images is None:
+            images = self._images = {}
+        image = images.get(output)
         if image is not None or self.corrupt or self.data is None:
             return image
         pixel_format = self.pixel_format
@@ -180,7 +183,7 @@ class Frame:
         if pixel_format.compressed:
             self.decoded = True
             self.corrupt = image is None
-        self._images[output] = image
+        images[output] = image
         return image
 
     def bgr(self) -> Optional[np.ndarray]:

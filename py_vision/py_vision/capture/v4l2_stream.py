@@ -40,7 +40,6 @@ import mmap
 import os
 import select
 import struct
-import time
 from typing import List, Optional
 
 import numpy as np
@@ -84,6 +83,18 @@ BUFFERS = 4
 # Where _BUFFER's values hold each field, and where `memory` lies in the structure.
 _INDEX, _BYTESUSED, _FLAGS, _SEC, _USEC, _SEQUENCE, _OFFSET, _LENGTH = 0, 2, 3, 5, 6, 17, 19, 20
 _MEMORY_AT = struct.calcsize('@5Ill2I8BI')
+
+
+def _buffer_for(index: int) -> bytes:
+    """Return a struct v4l2_buffer asking for buffer `index` of the capture queue, mmap'd."""
+    buffer = bytearray(_BUFFER.size)
+    struct.pack_into('=II', buffer, 0, index, BUF_TYPE_VIDEO_CAPTURE)
+    struct.pack_into('=I', buffer, _MEMORY_AT, MEMORY_MMAP)
+    return bytes(buffer)
+
+
+_BUFFERS = [_buffer_for(index) for index in range(32)]   # VIDEO_MAX_FRAME buffers at most
+_DEQUEUE = _BUFFERS[0]
 _STREAM_TYPE = struct.pack('=I', BUF_TYPE_VIDEO_CAPTURE)
 
 # Why a stream does not start, by errno, where open_problem's words would not tell a user.
@@ -118,11 +129,11 @@ class V4L2Source:
         self._format: Optional[StreamFormat] = None
         self._pixel_format: Optional[PixelFormat] = None
         self._timeout_ms = 1000
+        self._whole = 0          # the bytes of a whole raw frame (0: compressed)
         self._wake_read, self._wake_write = os.pipe2(os.O_NONBLOCK | os.O_CLOEXEC)
         self._poll = select.poll()
-        self._poll.register(self._fd, select.POLLIN | select.POLLPRI)
+        self._poll.register(self._fd, select.POLLIN)
         self._poll.register(self._wake_read, select.POLLIN)
-        self._buffer = bytearray(_BUFFER.size)
 
     # --- formats and controls: the device's own answers ------------------------------------
 
@@ -153,7 +164,9 @@ class V4L2Source:
         _, width, height, code, _, bytesperline, *_ = _FORMAT.unpack(request)
         rate = self._set_rate(fps)
         self._format = StreamFormat(fourcc_text(code), width, height, rate or fps, bytesperline)
-        self._pixel_format = self._format.pixel_format
+        self._pixel_format = pixel_format = self._format.pixel_format
+        if pixel_format is not None and not pixel_format.compressed:
+            self._whole = pixel_format.frame_bytes(width, height, bytesperline)
         # A frame comes within a few periods of a slow camera, within a second of any other.
         self._timeout_ms = int(1000 * max(1.0, 3.0 / max(rate or fps, 1e-3)))
         return self._format
@@ -206,9 +219,7 @@ class V4L2Source:
                             % count)
         try:
             for index in range(count):
-                info = bytearray(_BUFFER.size)
-                struct.pack_into('=II', info, 0, index, BUF_TYPE_VIDEO_CAPTURE)
-                struct.pack_into('=I', info, _MEMORY_AT, MEMORY_MMAP)
+                info = bytearray(_BUFFERS[index])
                 fcntl.ioctl(self._fd, VIDIOC_QUERYBUF, info)
                 fields = _BUFFER.unpack(info)
                 self._maps.append(mmap.mmap(self._fd, fields[_LENGTH], mmap.MAP_SHARED,
@@ -218,10 +229,7 @@ class V4L2Source:
             raise _stream_error('mapping the buffers', error) from None
 
     def _queue(self, index: int) -> None:
-        buffer = bytearray(_BUFFER.size)
-        struct.pack_into('=II', buffer, 0, index, BUF_TYPE_VIDEO_CAPTURE)
-        struct.pack_into('=I', buffer, _MEMORY_AT, MEMORY_MMAP)
-        fcntl.ioctl(self._fd, VIDIOC_QBUF, buffer)
+        fcntl.ioctl(self._fd, VIDIOC_QBUF, bytearray(_BUFFERS[index]))
 
     def stop(self) -> None:
         """Stop streaming (VIDIOC_STREAMOFF); the device, its buffers and controls are kept."""
@@ -241,62 +249,56 @@ class V4L2Source:
         The previous frame's buffer goes back to the driver first. A buffer the driver flagged
         as an error comes back as a Frame with `error` set (and no data).
         """
+        # Per frame, the fewest Python steps: poll(), then DQBUF (a DQBUF that finds nothing
+        # ready would raise, and an exception costs more than the poll).
         if not self._streaming:
             return None
+        fd = self._fd
         if self._held is not None:
             held, self._held = self._held, None
             try:
-                self._queue(held)
+                fcntl.ioctl(fd, VIDIOC_QBUF, bytearray(_BUFFERS[held]))
             except OSError:
                 return None
-        buffer = self._buffer
-        deadline = None
-        while True:
-            struct.pack_into('=II', buffer, 4, BUF_TYPE_VIDEO_CAPTURE, 0)
-            struct.pack_into('=I', buffer, _MEMORY_AT, MEMORY_MMAP)
+        timeout, buffer = self._timeout_ms, bytearray(_DEQUEUE)
+        for _ in range(100):
+            events = self._poll.poll(timeout)
+            if not events or events[-1][0] != fd:   # a timeout, or interrupt()
+                return self._woken(events)
             try:
-                fcntl.ioctl(self._fd, VIDIOC_DQBUF, buffer)
-                break
+                fcntl.ioctl(fd, VIDIOC_DQBUF, buffer)
+                return self._frame(_BUFFER.unpack(buffer))
+            except BlockingIOError:
+                timeout = 10   # readable, yet nothing to take: ask again, briefly
+            except OSError:
+                return None    # unplugged, or the stream failed for good
+        return None
+
+    def _woken(self, events) -> None:
+        """Take interrupt()'s byte, if it woke the wait."""
+        if events:
+            try:
+                os.read(self._wake_read, 64)
             except BlockingIOError:
                 pass
-            except OSError:
-                return None   # unplugged, or the stream failed for good
-            now = time.monotonic()
-            deadline = deadline or now + self._timeout_ms / 1000.0
-            if now >= deadline or not self._wait(deadline - now):
-                return None
-        return self._frame(_BUFFER.unpack(buffer))
-
-    def _wait(self, seconds: float) -> bool:
-        """Wait for the device to be readable; False when interrupted, on an error or timeout."""
-        events = self._poll.poll(max(1, int(seconds * 1000)))
-        for fd, _ in events:
-            if fd == self._wake_read:
-                try:
-                    os.read(self._wake_read, 64)
-                except BlockingIOError:
-                    pass
-                return False
-        return any(revents & select.POLLIN for _, revents in events)
 
     def _frame(self, fields) -> Frame:
         index, flags = fields[_INDEX], fields[_FLAGS]
         captured = None
         if flags & BUF_FLAG_TIMESTAMP_MASK == BUF_FLAG_TIMESTAMP_MONOTONIC:
-            captured = fields[_SEC] + fields[_USEC] / 1e6
-        stream, pixel_format = self._format, self._pixel_format
-        frame = Frame(fields[_SEQUENCE], captured, pixel_format, stream.width, stream.height,
-                      bytesperline=stream.bytesperline)
+            captured = fields[_SEC] + fields[_USEC] * 1e-6
+        stream = self._format
+        frame = Frame(fields[_SEQUENCE], captured, self._pixel_format, stream.width,
+                      stream.height, bytesperline=stream.bytesperline)
         if flags & BUF_FLAG_ERROR:
             frame.error = True
             self._queue_back(index)
             return frame
         self._held = index
-        used = min(fields[_BYTESUSED], len(self._maps[index]))
-        frame.data = np.frombuffer(self._maps[index], np.uint8, used)
-        if not pixel_format.compressed and used < pixel_format.frame_bytes(
-                stream.width, stream.height, stream.bytesperline):
-            frame.corrupt = True   # a raw frame cut short
+        mapped = self._maps[index]
+        used = min(fields[_BYTESUSED], len(mapped))
+        frame.data = np.frombuffer(mapped, np.uint8, used)
+        frame.corrupt = used < self._whole   # a raw frame cut short
         return frame
 
     def _queue_back(self, index: int) -> None:

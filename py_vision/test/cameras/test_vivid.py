@@ -34,7 +34,7 @@ from lifecycle_client import Lifecycle
 from lifecycle_msgs.msg import Transition
 from listing_text import control_line, formats
 import numpy as np
-from param_client import describe_parameters
+from param_client import describe_parameters, get_parameters, list_parameters, set_parameter
 from py_vision.control_names import param_name
 import pytest
 from rcl_interfaces.msg import ParameterType
@@ -262,6 +262,38 @@ def deactivated(vm):
     return got
 
 
+# Parameter changes on vivid, in the VM: the refusal of a control auto gain holds, a 64-bit
+# value, a button pressed, and every control of the device with what it is.
+WIDE = -(2 ** 50) - 7
+
+
+def change_controls(vm):
+    node = vm.launch(NODE, params=dict(STREAM, video_device=vm.device))
+    node.wait_for_output('opened', 120)
+    wait_until(lambda: 'button' in list_parameters(vm.peer, NODE), 120,
+               what='the controls declared')
+    got = {'gain_refused': set_parameter(vm.peer, NODE, 'gain', 50).reason,
+           'gain_constraints': describe_parameters(
+               vm.peer, NODE, ['gain'])[0].additional_constraints,
+           'wide': set_parameter(vm.peer, NODE, 'integer_64_bits', WIDE).successful,
+           'wide_value': vm.control('integer_64_bits'),
+           'pressed': set_parameter(vm.peer, NODE, 'button', True).reason or 'pressed'}
+    wait_until(lambda: get_parameters(vm.peer, NODE, ['button'])[0].bool_value is False, 60,
+               what='the button to read back false')
+    got['gain_freed'] = [set_parameter(vm.peer, NODE, name, value).reason for name, value in
+                         (('gain_automatic', False), ('gain', 50))]
+    got['gain_value'] = vm.control('gain')
+    fd = os.open(vm.device, os.O_RDWR | os.O_NONBLOCK)
+    try:
+        got['controls'] = v4l2_ioctl.list_ext_controls(
+            fd, v4l2_ioctl.CTRL_FLAG_NEXT_CTRL | v4l2_ioctl.CTRL_FLAG_NEXT_COMPOUND)
+    finally:
+        os.close(fd)
+    got['parameters'] = list_parameters(vm.peer, NODE)
+    got['output'] = node.output()
+    return got
+
+
 @pytest.fixture(scope='module')
 def faults(vivid_session):
     """Inject the faults once, on one node, for the tests that read what it did."""
@@ -303,3 +335,39 @@ def test_deactivate_stops_streaming_and_keeps_the_device(vivid):
     assert got['kept'] and got['other_program'] == 'EBUSY', got
     assert got['reactivated'], got['output']
     assert got['output'].count('opened /dev/video') == 1, got['output']  # never reopened
+
+
+def kind_of(control):
+    """Return what a control that is not a parameter is, as the publisher says it."""
+    if control['dims'] or control['type'] in (0x100, 0x101, 0x102) or (
+            control['flags'] & v4l2_ioctl.CTRL_FLAG_DYNAMIC_ARRAY):
+        return 'array'
+    return 'string' if control['type'] == v4l2_ioctl.CTRL_TYPE_STRING else 'compound'
+
+
+def test_a_refused_gain_names_auto_gain_and_every_control_type_is_handled(vivid):
+    got = vivid.run(change_controls)
+    out = got['output']
+    # vivid's auto gain holds the gain (v4l2_ctrl_auto_cluster): the refusal names it.
+    assert got['gain_refused'] == 'gain is inactive while gain_automatic is 1', out
+    assert got['gain_constraints'].endswith('; inactive while gain_automatic is 1')
+    assert got['gain_freed'] == ['', ''] and got['gain_value'] == 50, out
+    # A 64-bit value beyond 32 bits reaches the device (VIDIOC_S_EXT_CTRLS).
+    assert got['wide'] and got['wide_value'] == WIDE, out
+    # The button is pressed (the driver took it) and reads back false.
+    assert got['pressed'] == 'pressed', out
+    # Every control: a parameter when one number sets it, else named once in the log.
+    others = []
+    for control in got['controls']:
+        if control['type'] == v4l2_ioctl.CTRL_TYPE_CTRL_CLASS:
+            continue
+        name = param_name(control['name'])
+        if control['type'] in PARAMETER_TYPES and not control['dims'] and not (
+                control['flags'] & v4l2_ioctl.CTRL_FLAG_DYNAMIC_ARRAY):
+            assert name in got['parameters'], name
+        else:
+            assert name not in got['parameters'], name
+            others.append('%s (%s)' % (name, kind_of(control)))
+    assert {'string (string)', 'area (compound)', 'u32_1_element_array (array)'} <= set(others)
+    said = re.findall(r'not parameters \(no single value to set\): (.*)', out)
+    assert len(said) == 1 and said[0].split(', ') == others, out

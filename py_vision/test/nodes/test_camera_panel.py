@@ -24,6 +24,7 @@ import http.client
 import json
 import re
 
+from fake_clock import FakeClock
 from param_client import describe_parameters, get_parameters, set_parameter
 from rcl_interfaces.srv import ListParameters
 from ros_harness import wait_until
@@ -610,11 +611,11 @@ def test_a_node_answering_short_again_and_again_is_read_at_the_reload_period():
         'list_parameters': lambda request: SimpleNamespace(
             result=SimpleNamespace(names=['brightness'])),
         'describe_parameters': lambda request: SimpleNamespace(descriptors=[])}
-    now = [0.0]
-    panel = CameraPanel(node, '/usb_camera/image', clock=lambda: now[0])
+    clock = FakeClock(0.0)
+    panel = CameraPanel(node, '/usb_camera/image', clock=clock)
     reads = []
     for second in range(12):
-        now[0] = float(second)
+        clock.t = float(second)
         before = len(node.sent)
         panel._refresh()
         if any(service == 'list_parameters' for service, _, _ in node.sent[before:]):

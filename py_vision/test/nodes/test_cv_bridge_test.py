@@ -37,6 +37,8 @@ def image_msg(image, encoding, stamp_sec, frame_id='cam'):
     msg.header.stamp.sec = stamp_sec
     msg.header.frame_id = frame_id
     msg.height, msg.width = image.shape[:2]
+    if encoding == 'nv21':   # its chroma rows below its luma rows: half as many
+        msg.height = image.shape[0] * 2 // 3
     msg.encoding = encoding
     msg.step = image.shape[1] * (image.shape[2] if image.ndim == 3 else 1)
     msg.data = np.ascontiguousarray(image).tobytes()
@@ -88,6 +90,10 @@ def test_circle_is_drawn_on_large_images_and_the_rest_is_unchanged(launch, peer)
         (rng.integers(0, 256, (480, 640, 3), np.uint8), 'bgr8', None),
         (rng.integers(0, 256, (61, 61, 3), np.uint8), 'bgr8', None),
         (rng.integers(0, 256, (100, 90, 3), np.uint8), 'rgb8', cv2.COLOR_RGB2BGR),
+        # What usbcam_publisher's output_encoding native sends from YUV cameras.
+        (rng.integers(0, 256, (100, 90, 2), np.uint8), 'yuv422_yuy2', cv2.COLOR_YUV2BGR_YUY2),
+        (rng.integers(0, 256, (100, 90, 2), np.uint8), 'yuv422', cv2.COLOR_YUV2BGR_UYVY),
+        (rng.integers(0, 256, (150, 90), np.uint8), 'nv21', cv2.COLOR_YUV2BGR_NV21),
         (rng.integers(0, 256, (120, 160), np.uint8), 'mono8', cv2.COLOR_GRAY2BGR),
     ]
     for stamp, (image, encoding, to_bgr) in enumerate(cases, start=1):

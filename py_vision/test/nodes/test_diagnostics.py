@@ -21,6 +21,7 @@ cannot show, cv_bridge_test falling behind (WARN) and keeping up.
 """
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from fake_clock import FakeClock
 from param_client import set_parameter
 from py_vision.stats import StreamStats
 from py_vision.usbcam_subscriber import stream_status
@@ -131,20 +132,20 @@ def test_subscriber_status_shows_rate_latency_and_frames_it_cannot_show(launch, 
 
 def test_one_frame_received_is_no_rate_of_zero():
     # With one frame in the window there is no rate yet: the status must not say "0.0 fps".
-    now = [100.0]
-    stats = StreamStats(window_s=2.0, clock=lambda: now[0])
+    clock = FakeClock(100.0)
+    stats = StreamStats(window_s=2.0, clock=clock)
     assert stream_status(stats.snapshot(), 0, '/cam').message == 'waiting for frames on /cam'
     stats.add(0.002, 160, 120, 'bgr8')
-    now[0] += 0.05
+    clock.t += 0.05
     first = stream_status(stats.snapshot(), 0, '/cam')
     assert first.level == OK and 'rate not measured yet' in first.message, first.message
     assert 'fps' not in first.message
-    now[0] += 0.05
+    clock.t += 0.05
     stats.add(0.002, 160, 120, 'bgr8')
-    now[0] += 0.1
+    clock.t += 0.1
     second = stream_status(stats.snapshot(), 0, '/cam')
     assert second.level == OK and second.message == 'receiving 5.0 fps', second.message
-    now[0] += 5.0  # the stream stopped: both frames leave the window
+    clock.t += 5.0  # the stream stopped: both frames leave the window
     assert stream_status(stats.snapshot(), 0, '/cam').message == 'no frames on /cam lately'
 
 

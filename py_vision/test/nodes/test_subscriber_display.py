@@ -55,6 +55,15 @@ CASES = {
     'bayer_rggb8': ramp(np.uint8, 1, 255),
     '16UC1': ramp(np.uint16, 1, 1000),  # a depth image in millimetres
 }
+# What usbcam_publisher's output_encoding native sends from YUV cameras: a luma ramp over
+# neutral chroma, in each layout (a semi-planar one's chroma rows below its luma rows).
+LUMA, NEUTRAL = ramp(np.uint8, 1, 235), np.full((H, W), 128, np.uint8)
+CASES.update({
+    'yuv422_yuy2': np.dstack([LUMA, NEUTRAL]),
+    'yuv422': np.dstack([NEUTRAL, LUMA]),
+    'nv21': np.vstack([LUMA, NEUTRAL[:H // 2]]),
+    'nv24': np.vstack([LUMA, NEUTRAL, NEUTRAL]),
+})
 
 
 def message(encoding, image):

@@ -15,6 +15,7 @@
 """The camera layer on the synthetic USB 2.0 camera: pixel formats, rates, JPEG, controls."""
 
 import cv2
+from fake_clock import FakeClock
 import numpy as np
 from py_vision.capture import Camera as _Camera, SourceError, StreamFormat, SyntheticDevices
 from py_vision.capture.controls import CID
@@ -26,19 +27,6 @@ from py_vision.capture.synthetic_picture import (
 from py_vision.capture.v4l2 import V4L2Device, V4L2Error
 from py_vision.control_names import ControlNames, param_name
 import pytest
-
-
-class FakeClock:
-    """Sleeping advances the clock: the camera's pacing returns at once."""
-
-    def __init__(self):
-        self.t = 1000.0
-
-    def now(self):
-        return self.t
-
-    def sleep(self, seconds):
-        self.t += max(seconds, 0.0)
 
 
 class Camera:

@@ -412,6 +412,50 @@ def test_yuv422_to_colour(encoding, code):
     assert abs(int(BRIDGE.imgmsg_to_cv2(grey, 'bgr8').astype(int).mean()) - 128) <= 2
 
 
+@pytest.mark.parametrize('encoding', ['nv21', 'nv24'])
+def test_semi_planar_yuv_a_camera_sends(encoding):
+    # What a camera sends in the V4L2 formats NV21 and NV24, as py_vision's native output.
+    from py_vision.capture.pixel_formats import find
+    from py_vision.capture.synthetic_picture import synthetic_frame, synthetic_yuyv
+    layout = find(encoding.upper())
+    planes = np.ascontiguousarray(layout.from_yuyv(synthetic_yuyv(4, 64, 48))).reshape(-1)
+    array = planes.view(np.uint8).reshape(-1, 64)
+    msg = BRIDGE.cv2_to_imgmsg(array, encoding)
+    # The message is the picture's size; its data the planes, rows of `step` bytes.
+    assert (msg.height, msg.width, msg.step, len(msg.data)) == (48, 64, 64, planes.size)
+    assert np.array_equal(BRIDGE.imgmsg_to_cv2(msg), array)
+    for dst in ('bgr8', 'rgb8', 'mono8', 'bgra8', 'mono16'):
+        assert np.array_equal(BRIDGE.imgmsg_to_cv2(msg, dst),
+                              layout.convert(array, dst) if dst != 'bgra8' else cv2.cvtColor(
+                                  layout.convert(array, 'bgr8'), cv2.COLOR_BGR2BGRA))
+    bgr = BRIDGE.imgmsg_to_cv2(msg, 'bgr8')
+    assert np.abs(bgr.astype(int) - synthetic_frame(4, 64, 48)).mean() < 2.0
+    assert np.array_equal(cvtColorForDisplay(array, encoding), bgr)
+    with pytest.raises(CvBridgeError, match='even width and height'):
+        BRIDGE.cv2_to_imgmsg(np.zeros((21, 63), np.uint8), encoding)
+    if encoding == 'nv21':
+        with pytest.raises(CvBridgeError, match='22 rows is not a picture'):
+            BRIDGE.cv2_to_imgmsg(np.zeros((22, 64), np.uint8), encoding)
+    short = BRIDGE.cv2_to_imgmsg(array, encoding)
+    short.data = short.data[:-64]
+    with pytest.raises(CvBridgeError, match='wrongly formed'):
+        BRIDGE.imgmsg_to_cv2(short)
+
+
+def test_a_shared_message_holds_the_arrays_own_bytes_and_serializes():
+    # What ImagePublisher publishes: no copy of a frame until rclpy's own, at publish.
+    from rclpy.serialization import deserialize_message, serialize_message
+    image = random_image('bgr8', 6, 8)
+    msg = BRIDGE.cv2_to_imgmsg(image, 'bgr8', share=True)
+    image[0, 0, 0] = 7
+    assert bytes(msg.data)[0] == 7 and (msg.height, msg.width, msg.step) == (6, 8, 24)
+    back = deserialize_message(serialize_message(msg), Image)
+    assert np.array_equal(BRIDGE.imgmsg_to_cv2(back), image)
+    copied = BRIDGE.cv2_to_imgmsg(image, 'bgr8')
+    image[0, 0, 0] = 9
+    assert bytes(copied.data)[0] == 7
+
+
 # --- bad input ------------------------------------------------------------------------------
 
 

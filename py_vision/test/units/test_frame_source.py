@@ -19,6 +19,7 @@ import os
 import sys
 
 import cv2
+from fake_clock import FakeClock
 import numpy as np
 from py_vision.capture import camera as camera_module
 from py_vision.capture import open_source, SourceError, SyntheticDevices
@@ -31,27 +32,19 @@ linux_only = pytest.mark.skipif(not sys.platform.startswith('linux'),
                                 reason='V4L2 device nodes exist on Linux only')
 
 
-class FakeClock:
-    """time.monotonic / time.sleep stand-ins: sleeping advances the clock, nothing waits."""
-
-    def __init__(self):
-        self.t = 500.0
-        self.devices = SyntheticDevices(self)
-
-    def now(self):
-        return self.t
-
-    def sleep(self, seconds):
-        self.t += max(0.0, seconds)
-
-    def open(self, video_device, width, height, fps):  # noqa: A003
-        """Open a source whose pacing runs on this clock."""
-        return open_source(video_device, width, height, fps, synthetic=self.devices, clock=self)
-
-
 @pytest.fixture
 def clock():
     return FakeClock()
+
+
+@pytest.fixture
+def paced(clock):
+    """open_source with its pacing and its synthetic devices on the test's fake clock."""
+    devices = SyntheticDevices(clock)
+
+    def open_paced(video_device, width, height, fps):
+        return open_source(video_device, width, height, fps, synthetic=devices, clock=clock)
+    return open_paced
 
 
 @pytest.fixture
@@ -66,12 +59,9 @@ def video(tmp_path):
     return path
 
 
-def open_error(video_device, clock=None):
+def open_error(video_device, paced=open_source):
     with pytest.raises(SourceError) as error:
-        if clock is None:
-            open_source(video_device, 640, 480, 10.0)
-        else:
-            clock.open(video_device, 640, 480, 10.0)
+        paced(video_device, 640, 480, 10.0)
     message = str(error.value)
     assert '\n' not in message
     assert '"%s"' % video_device in message
@@ -135,8 +125,8 @@ def test_a_device_that_does_not_open_is_one_line_without_opencv_noise(capfd):
     assert capfd.readouterr().err == ''
 
 
-def test_synthetic_devices(clock):
-    cap = clock.open('synthetic', 321, 240, 20.0)
+def test_synthetic_devices(paced):
+    cap = paced('synthetic', 321, 240, 20.0)
     assert isinstance(cap, SyntheticCamera)
     assert (cap.get(cv2.CAP_PROP_FRAME_WIDTH), cap.get(cv2.CAP_PROP_FRAME_HEIGHT)) == (320, 240)
     assert cap.get(cv2.CAP_PROP_FPS) == 20.0
@@ -144,17 +134,17 @@ def test_synthetic_devices(clock):
     assert ok and read_frame_index(frame) == 0
     assert 'fail_open' in open_error('synthetic?fail_open=1')
     assert 'bogus' in open_error('synthetic?bogus=1')
-    assert 'size' in str(pytest.raises(SourceError, clock.open, 'synthetic', 0, 480, 10.0).value)
+    assert 'size' in str(pytest.raises(SourceError, paced, 'synthetic', 0, 480, 10.0).value)
 
 
-def test_an_unplugged_synthetic_device_does_not_reopen(clock):
-    cap = clock.open('synthetic?stop_after=1', 160, 120, 10.0)
+def test_an_unplugged_synthetic_device_does_not_reopen(paced):
+    cap = paced('synthetic?stop_after=1', 160, 120, 10.0)
     assert cap.read()[0] and not cap.read()[0]
-    assert 'unplugged' in open_error('synthetic?stop_after=1', clock)
+    assert 'unplugged' in open_error('synthetic?stop_after=1', paced)
 
 
-def test_a_video_file_plays_at_its_own_size_and_loops(clock, video):
-    cap = clock.open(str(video), 640, 480, 50.0)
+def test_a_video_file_plays_at_its_own_size_and_loops(clock, paced, video):
+    cap = paced(str(video), 640, 480, 50.0)
     assert isinstance(cap, VideoFileSource) and cap.isOpened()
     # A file is not resized: get() reports what it really is.
     assert (cap.get(cv2.CAP_PROP_FRAME_WIDTH), cap.get(cv2.CAP_PROP_FRAME_HEIGHT)) == (160, 120)
@@ -173,8 +163,8 @@ def test_a_video_file_plays_at_its_own_size_and_loops(clock, video):
     assert not cap.isOpened() and cap.read() == (False, None)
 
 
-def test_a_video_file_uses_its_own_rate_when_fps_is_not_positive(clock, video):
-    cap = clock.open(str(video), 640, 480, 0)
+def test_a_video_file_uses_its_own_rate_when_fps_is_not_positive(clock, paced, video):
+    cap = paced(str(video), 640, 480, 0)
     assert cap.get(cv2.CAP_PROP_FPS) == pytest.approx(25.0)
     start = clock.t
     cap.read()
@@ -182,8 +172,8 @@ def test_a_video_file_uses_its_own_rate_when_fps_is_not_positive(clock, video):
     assert clock.t == pytest.approx(start + 0.04)
 
 
-def test_a_late_reader_does_not_skip_file_frames(clock, video):
-    cap = clock.open(str(video), 640, 480, 25.0)
+def test_a_late_reader_does_not_skip_file_frames(clock, paced, video):
+    cap = paced(str(video), 640, 480, 25.0)
     cap.read()
     clock.t += 1.0
     ok, frame = cap.read()
@@ -194,8 +184,8 @@ def test_a_late_reader_does_not_skip_file_frames(clock, video):
 
 
 @pytest.mark.parametrize('after', [2, 6])
-def test_reads_fail_once_the_file_is_gone(clock, video, after):
-    cap = clock.open(str(video), 640, 480, 100.0)
+def test_reads_fail_once_the_file_is_gone(paced, video, after):
+    cap = paced(str(video), 640, 480, 100.0)
     for _ in range(after):
         assert cap.read()[0]
     video.unlink()
@@ -204,8 +194,8 @@ def test_reads_fail_once_the_file_is_gone(clock, video, after):
     assert 'no such device or file' in open_error(str(video))
 
 
-def test_a_file_that_becomes_unreadable_at_the_loop_fails(clock, video):
-    cap = clock.open(str(video), 640, 480, 100.0)
+def test_a_file_that_becomes_unreadable_at_the_loop_fails(paced, video):
+    cap = paced(str(video), 640, 480, 100.0)
     for _ in range(6):
         assert cap.read()[0]
     video.write_bytes(b'not a video any more')

@@ -16,6 +16,7 @@
 
 import threading
 
+from fake_clock import FakeClock
 from py_vision.latest_frame import LatestFrameWorker
 import pytest
 from ros_harness import wait_until
@@ -87,20 +88,12 @@ def test_none_is_an_item_like_any_other(closing):
     assert step.items == [None]
 
 
-class FakeClock:
-    def __init__(self):
-        self.now = 1000.0
-
-    def __call__(self):
-        return self.now
-
-
 def test_statistics_give_counts_and_percentiles_of_the_recent_window(closing):
     clock = FakeClock()
     durations = [i / 100 for i in range(1, 101)]  # 10 ms .. 1000 ms, one step each
 
     def step(duration):
-        clock.now += duration
+        clock.t += duration
     worker = LatestFrameWorker(step, window_s=100.0, clock=clock)
     closing(worker)
     empty = worker.snapshot()
@@ -120,7 +113,7 @@ def test_statistics_give_counts_and_percentiles_of_the_recent_window(closing):
     assert snap['age_ms_p50'] == pytest.approx(100.0)
     assert snap['age_ms_p99'] == pytest.approx(198.0)
     # The percentiles describe the last window_s seconds; the counts are since start.
-    clock.now += 100.1
+    clock.t += 100.1
     later = worker.snapshot()
     assert later['processing_ms_p50'] is None and later['age_ms_p99'] is None
     assert later['processed'] == 100

@@ -18,6 +18,7 @@
 import time
 
 import cv2
+from fake_clock import FakeClock
 import numpy as np
 from py_vision.capture.pixel_formats import find
 from py_vision.capture.synthetic_device import (
@@ -30,25 +31,15 @@ import pytest
 SIZES = [(160, 120), (640, 480), (1280, 720), (1920, 1080)]
 
 
-class FakeClock:
-    """time.monotonic / time.sleep stand-ins: sleeping advances the clock, nothing waits."""
-
-    def __init__(self):
-        self.t = 1000.0
-        self.slept = 0.0
-        self.devices = SyntheticDevices(self)  # the synthetic devices on this clock
-
-    def now(self):
-        return self.t
-
-    def sleep(self, seconds):
-        self.slept += max(0.0, seconds)
-        self.t += max(0.0, seconds)
-
-
 @pytest.fixture
 def clock():
     return FakeClock()
+
+
+@pytest.fixture
+def devices(clock):
+    """Return the synthetic devices of one test, paced by its fake clock."""
+    return SyntheticDevices(clock)
 
 
 def size_of(cap):
@@ -56,8 +47,8 @@ def size_of(cap):
 
 
 @pytest.mark.parametrize('width,height', SIZES)
-def test_frames_have_the_requested_size(clock, width, height):
-    cam = SyntheticCamera(width, height, 30.0, devices=clock.devices)
+def test_frames_have_the_requested_size(devices, width, height):
+    cam = SyntheticCamera(width, height, 30.0, devices=devices)
     assert cam.isOpened()
     assert size_of(cam) == (width, height)
     # YUYV, the format it opens in, is limited by the USB 2.0 bus.
@@ -68,8 +59,8 @@ def test_frames_have_the_requested_size(clock, width, height):
     assert frame.flags['C_CONTIGUOUS']
 
 
-def test_set_changes_the_size_like_a_driver(clock):
-    cam = SyntheticCamera(640, 480, 10.0, devices=clock.devices)
+def test_set_changes_the_size_like_a_driver(devices):
+    cam = SyntheticCamera(640, 480, 10.0, devices=devices)
     assert cam.set(cv2.CAP_PROP_FRAME_WIDTH, 321)
     assert cam.set(cv2.CAP_PROP_FRAME_HEIGHT, 241)
     # YUYV carries pixel pairs: an odd width is rounded down, and get() tells the truth.
@@ -77,22 +68,22 @@ def test_set_changes_the_size_like_a_driver(clock):
     assert cam.read()[1].shape == (241, 320, 3)
     assert cam.set(cv2.CAP_PROP_FRAME_WIDTH, 1)
     assert cam.get(cv2.CAP_PROP_FRAME_WIDTH) == 2
-    assert SyntheticCamera(641, 480, devices=clock.devices).get(cv2.CAP_PROP_FRAME_WIDTH) == 640
+    assert SyntheticCamera(641, 480, devices=devices).get(cv2.CAP_PROP_FRAME_WIDTH) == 640
 
 
 @pytest.mark.parametrize('value', [0, -4, 8193, 1e9, float('nan'), float('inf')])
-def test_absurd_sizes_are_refused_and_the_size_kept(clock, value):
-    cam = SyntheticCamera(320, 240, 10.0, devices=clock.devices)
+def test_absurd_sizes_are_refused_and_the_size_kept(devices, value):
+    cam = SyntheticCamera(320, 240, 10.0, devices=devices)
     assert not cam.set(cv2.CAP_PROP_FRAME_WIDTH, value)
     assert not cam.set(cv2.CAP_PROP_FRAME_HEIGHT, value)
     assert size_of(cam) == (320, 240)
     assert cam.read()[1].shape == (240, 320, 3)
     with pytest.raises(ValueError, match='size'):
-        SyntheticCamera(value, 240, devices=clock.devices)
+        SyntheticCamera(value, 240, devices=devices)
 
 
-def test_fps_property_and_refused_properties(clock):
-    cam = SyntheticCamera(160, 120, 10.0, devices=clock.devices)
+def test_fps_property_and_refused_properties(devices):
+    cam = SyntheticCamera(160, 120, 10.0, devices=devices)
     assert cam.set(cv2.CAP_PROP_FPS, 25)
     assert cam.get(cv2.CAP_PROP_FPS) == 25.0
     assert not cam.set(cv2.CAP_PROP_FPS, 0)
@@ -103,11 +94,11 @@ def test_fps_property_and_refused_properties(clock):
     fourcc = int(cam.get(cv2.CAP_PROP_FOURCC))
     assert bytes((fourcc >> s) & 0xFF for s in (0, 8, 16, 24)) == b'YUYV'
     with pytest.raises(ValueError, match='framerate'):
-        SyntheticCamera(160, 120, 0, devices=clock.devices)
+        SyntheticCamera(160, 120, 0, devices=devices)
 
 
-def test_frames_are_paced_at_the_requested_rate(clock):
-    cam = SyntheticCamera(160, 120, 10.0, devices=clock.devices)
+def test_frames_are_paced_at_the_requested_rate(clock, devices):
+    cam = SyntheticCamera(160, 120, 10.0, devices=devices)
     start = clock.t
     for n in range(5):
         ok, frame = cam.read()
@@ -120,8 +111,8 @@ def test_frames_are_paced_at_the_requested_rate(clock):
         assert cam.get(cv2.CAP_PROP_POS_FRAMES) == n + 1
 
 
-def test_a_late_reader_gets_the_newest_frame_and_loses_the_others(clock):
-    cam = SyntheticCamera(160, 120, 10.0, devices=clock.devices)
+def test_a_late_reader_gets_the_newest_frame_and_loses_the_others(clock, devices):
+    cam = SyntheticCamera(160, 120, 10.0, devices=devices)
     start = clock.t
     cam.read()
     clock.t += 0.45  # the caller was busy for four and a half frame periods
@@ -135,8 +126,8 @@ def test_a_late_reader_gets_the_newest_frame_and_loses_the_others(clock):
     assert clock.t == pytest.approx(start + 0.5)
 
 
-def test_a_size_change_restarts_the_schedule_and_the_sequence_goes_on(clock):
-    cam = SyntheticCamera(160, 120, 10.0, devices=clock.devices)
+def test_a_size_change_restarts_the_schedule_and_the_sequence_goes_on(clock, devices):
+    cam = SyntheticCamera(160, 120, 10.0, devices=devices)
     for _ in range(3):
         cam.read()
     clock.t += 0.1
@@ -182,9 +173,9 @@ def test_the_code_blocks_are_pure_black_and_white():
     assert np.array_equal(code[:, :, 1], code[:, :, 2])
 
 
-def test_content_is_deterministic_and_changes_every_frame(clock):
-    one = SyntheticCamera(640, 480, 10.0, name='one', devices=clock.devices)
-    two = SyntheticCamera(640, 480, 10.0, name='two', devices=clock.devices)
+def test_content_is_deterministic_and_changes_every_frame(devices):
+    one = SyntheticCamera(640, 480, 10.0, name='one', devices=devices)
+    two = SyntheticCamera(640, 480, 10.0, name='two', devices=devices)
     previous = None
     for n in range(4):
         ok1, frame1 = one.read()
@@ -197,8 +188,8 @@ def test_content_is_deterministic_and_changes_every_frame(clock):
         previous = frame1
 
 
-def test_each_read_returns_a_new_array(clock):
-    cam = SyntheticCamera(320, 240, 10.0, devices=clock.devices)
+def test_each_read_returns_a_new_array(devices):
+    cam = SyntheticCamera(320, 240, 10.0, devices=devices)
     _, first = cam.read()
     kept = first.copy()
     _, second = cam.read()
@@ -206,16 +197,16 @@ def test_each_read_returns_a_new_array(clock):
     assert np.array_equal(first, kept)
 
 
-def test_grab_and_retrieve(clock):
-    cam = SyntheticCamera(160, 120, 10.0, devices=clock.devices)
+def test_grab_and_retrieve(devices):
+    cam = SyntheticCamera(160, 120, 10.0, devices=devices)
     assert cam.retrieve() == (False, None)
     assert cam.grab()
     ok, frame = cam.retrieve()
     assert ok and read_frame_index(frame) == cam.last_index == 0
 
 
-def test_release_closes(clock):
-    cam = SyntheticCamera(160, 120, 10.0, devices=clock.devices)
+def test_release_closes(devices):
+    cam = SyntheticCamera(160, 120, 10.0, devices=devices)
     cam.release()
     assert not cam.isOpened()
     assert cam.read() == (False, None)
@@ -283,35 +274,35 @@ def test_a_damaged_code_is_rejected():
     assert read_frame_index(frame) is None
 
 
-def test_fail_open(clock):
-    cam = SyntheticCamera(fail_open=True, devices=clock.devices)
+def test_fail_open(devices):
+    cam = SyntheticCamera(fail_open=True, devices=devices)
     assert not cam.isOpened()
     assert cam.read() == (False, None)
     assert 'fail_open' in cam.error
 
 
-def test_stop_after_unplugs_for_good(clock):
-    cam = clock.devices.open('synthetic?stop_after=3', 160, 120, 10.0)
+def test_stop_after_unplugs_for_good(clock, devices):
+    cam = devices.open('synthetic?stop_after=3', 160, 120, 10.0)
     assert [cam.read()[0] for _ in range(5)] == [True, True, True, False, False]
     assert cam.isOpened()  # as with V4L2: the device stays open, its reads fail
     assert 'unplugged' in cam.error
     clock.t += 1e6
-    assert not clock.devices.open('synthetic?stop_after=3', 160, 120, 10.0).isOpened()
+    assert not devices.open('synthetic?stop_after=3', 160, 120, 10.0).isOpened()
     # Another spec is another device.
-    assert clock.devices.open('synthetic', 160, 120, 10.0).read()[0]
+    assert devices.open('synthetic', 160, 120, 10.0).read()[0]
 
 
-def test_unplugged_for_comes_back_after_the_delay(clock):
+def test_unplugged_for_comes_back_after_the_delay(clock, devices):
     spec = 'synthetic?stop_after=3&unplugged_for=2'
-    cam = clock.devices.open(spec, 160, 120, 10.0)
+    cam = devices.open(spec, 160, 120, 10.0)
     assert [cam.read()[0] for _ in range(4)] == [True, True, True, False]
     unplugged_at = clock.t
     cam.release()
     clock.t = unplugged_at + 1.9
-    again = clock.devices.open(spec, 160, 120, 10.0)
+    again = devices.open(spec, 160, 120, 10.0)
     assert not again.isOpened() and again.read() == (False, None)
     clock.t = unplugged_at + 2.0
-    back = clock.devices.open(spec, 160, 120, 10.0)
+    back = devices.open(spec, 160, 120, 10.0)
     assert back.isOpened()
     indices = []
     for _ in range(8):  # more than stop_after: it does not unplug a second time
@@ -322,8 +313,8 @@ def test_unplugged_for_comes_back_after_the_delay(clock):
     assert indices == list(range(22, 30))
 
 
-def test_fail_every_fails_single_reads(clock):
-    cam = SyntheticCamera(160, 120, 10.0, fail_every=3, devices=clock.devices)
+def test_fail_every_fails_single_reads(clock, devices):
+    cam = SyntheticCamera(160, 120, 10.0, fail_every=3, devices=devices)
     results = []
     for _ in range(7):
         ok, frame = cam.read()

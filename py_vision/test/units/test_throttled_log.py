@@ -15,6 +15,7 @@
 
 """ThrottledLog: one line per kind and period, and what it held back counted in the next."""
 
+from fake_clock import FakeClock
 from py_vision.throttled_log import ThrottledLog
 
 
@@ -32,19 +33,19 @@ class Lines:
 
 
 def test_one_line_per_key_and_period_and_the_count_of_those_held_back():
-    now = [100.0]
+    clock = FakeClock(100.0)
     logger = Lines()
-    log = ThrottledLog(logger, period=10.0, clock=lambda: now[0])
+    log = ThrottledLog(logger, period=10.0, clock=clock)
     log.warning('big', 'an image too large')
     log.error('bad', 'a bad request')
     for _ in range(3):
-        now[0] += 1.0
+        clock.t += 1.0
         log.warning('big', 'an image too large')
     assert logger.lines == [('warning', 'an image too large'), ('error', 'a bad request')]
-    now[0] = 111.0
+    clock.t = 111.0
     log.warning('big', 'an image too large')
     assert logger.lines[-1] == ('warning', 'an image too large (3 more like it in the last 11 s)')
-    now[0] = 125.0
+    clock.t = 125.0
     log.warning('big', 'an image too large')
     assert logger.lines[-1] == ('warning', 'an image too large')
 
