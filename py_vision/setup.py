@@ -65,8 +65,10 @@ setup(
     name=package_name,
     version='0.1.0',
     packages=find_packages(exclude=['test']),
-    # The viewer's page, read from beside its module in an install and in a source tree alike.
-    package_data={'py_vision.viewer': ['page/*.html', 'page/*.js', 'page/*.css']},
+    # The viewer's page and the synthetic camera's description, read from beside their modules
+    # in an install and in a source tree alike.
+    package_data={'py_vision.viewer': ['page/*.html', 'page/*.js', 'page/*.css'],
+                  'py_vision.capture': ['*.yaml']},
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),

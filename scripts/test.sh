@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Set everything up (scripts/setup.sh --test) and run the whole test suite against the
 # colcon-installed package; if it passes, run every test that needs no browser again on the
-# boards' versions: Python 3.10, numpy 1.23.3, OpenCV 4.6.0, against its own build
-# (.venv-board, scripts/setup.sh --board). Without a Python 3.10 that second run is skipped,
-# with the reason, on a developer's PC; in CI (CI=true) it is required, so that is a failure.
+# boards' software: Python 3.10, numpy 1.23.3, OpenCV 4.6.0 and their ROS 2 Humble (from
+# ../shared/humble), against its own build (.venv-board, scripts/setup.sh --board). Without a
+# Python 3.10 or that Humble that second run is skipped, with the reason, on a developer's PC;
+# in CI (CI=true) it is required, so that is a failure.
 # Extra arguments go to pytest, in both runs (e.g. -k bridge, -x).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -18,13 +19,22 @@ in_ci=false
 # developer's PC apt is asked first (-s) whether the install would upgrade any other package
 # (a newer dependency); if so nothing is installed and the test is skipped. CI's machine is the
 # project's own: there the package is installed whatever it needs.
-# Usage: install_tool PACKAGE 'WHAT NEEDS IT' [COMMAND...] (the commands that show it is there)
+# Usage: install_tool PACKAGE 'WHAT NEEDS IT' [COMMAND...] (the commands that show it is there;
+# without any, the PACKAGE words are Debian packages, each there when dpkg has it installed).
 install_tool() {
-  local package=$1 what=$2 log=/tmp/py_vision-apt.log plan upgrades command
+  local package=$1 what=$2 log=/tmp/py_vision-apt.log plan upgrades command name missing=
   shift 2
   for command in "$@"; do
     command -v "$command" >/dev/null 2>&1 && return
   done
+  if [ $# = 0 ]; then
+    for name in $package; do
+      dpkg-query -W -f='${Status}' "$name" 2>/dev/null | grep -q 'ok installed' \
+        || missing="$missing $name"
+    done
+    [ -z "$missing" ] && return
+    package=${missing# }
+  fi
   if [ "$(id -u)" != 0 ] || ! command -v apt-get >/dev/null 2>&1; then
     echo "[test] $package is missing: $what will be skipped (in CI: fail)" \
       "(install Debian's $package)"
@@ -32,7 +42,7 @@ install_tool() {
   fi
   if [ "$in_ci" = true ]; then
     apt-get update -qq >$log 2>&1 || true
-  elif ! plan=$(apt-get install -s --no-upgrade "$package" 2>$log); then
+  elif ! plan=$(apt-get install -s --no-upgrade $package 2>$log); then
     echo "[test] $package is missing and apt cannot install it (see $log; apt-get update" \
       "may help): $what will be skipped"
     return
@@ -45,7 +55,7 @@ install_tool() {
     return
   fi
   echo "[test] installing $package for $what"
-  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-upgrade "$package" >>$log 2>&1 \
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-upgrade $package >>$log 2>&1 \
     || echo "[test] could not install $package (see $log)"
 }
 [ -n "${CHROMIUM:-}" ] \
@@ -100,27 +110,45 @@ if [ "$status" = 5 ]; then
 fi
 [ "$status" = 0 ] || exit "$status"
 
-# The boards run Python 3.10 with numpy 1.23.3 and OpenCV 4.6.0: every test but the browser
-# ones (PY_VISION_BROWSER=off leaves them out: no Playwright there) again on those versions, against the build in .venv-board, so that the nodes these tests
-# start run there too.
-echo '[test] board-version run: Python 3.10, numpy 1.23.3, OpenCV 4.6.0 (.venv-board)'
-setup=0
-bash scripts/setup.sh --board || setup=$?
-if [ "$setup" = 3 ]; then
-  if [ "$in_ci" = true ]; then
-    echo '[test] FAILED: the board-version run is required in CI and there is no Python 3.10' >&2
-    exit 1
+# The boards' software: Python 3.10 with numpy 1.23.3 and OpenCV 4.6.0, and their ROS 2 Humble
+# (rclpy 3.3.2, launch_ros 0.19.2, Fast DDS 2.6.0) unpacked from its tarball. Every test but the
+# browser ones (PY_VISION_BROWSER=off leaves them out: no Playwright there) runs again there,
+# against the package built with colcon against that Humble (.venv-board), so that the nodes
+# and the `ros2 launch` these tests start run there too. Humble's shared libraries come from
+# Debian (and zstd unpacks it).
+board_run() {
+  local setup=0 status=0 missing
+  install_tool 'libspdlog1.10 libfmt9 libtinyxml2-9 libyaml-0-2 libssl3 zstd' \
+    "the board-version run's ROS 2 Humble"
+  echo "[test] board-version run: Python 3.10, numpy 1.23.3, OpenCV 4.6.0, ROS 2 Humble" \
+    '(.venv-board)'
+  bash scripts/setup.sh --board || setup=$?
+  case $setup in
+    0) ;;
+    3) missing='no Python 3.10 on this machine' ;;
+    4) missing="the boards' ROS 2 Humble was not found" ;;
+    *) return "$setup" ;;
+  esac
+  if [ -n "${missing:-}" ]; then
+    if [ "$in_ci" = true ]; then
+      echo "[test] FAILED: the board-version run is required in CI: $missing (see above)" >&2
+      return 1
+    fi
+    echo "[test] SKIPPED the board-version run: $missing (see above); the main run passed," \
+      'but nothing was tested on the boards'"'"' software' >&2
+    return 0
   fi
-  echo '[test] SKIPPED the board-version run: no Python 3.10 on this machine (see above);' \
-    'the main run passed, but nothing was tested on the boards'"'"' versions' >&2
-  exit 0
-fi
-[ "$setup" = 0 ] || exit "$setup"
-.venv-board/bin/python -c 'import sys, cv2, numpy
-print("[test] Python", sys.version.split()[0], "numpy", numpy.__version__, "OpenCV", cv2.__version__)'
-status=0
-# PY_VISION_VIVID=off: the vivid VM's tests are the main run's (docs/vivid.md says why).
-PY_VISION_INSTALL=.venv-board/install PY_VISION_BROWSER=off PY_VISION_VIVID=off \
-  .venv-board/bin/python -m pytest py_vision/test --ignore=py_vision/test/browser \
-  -p no:cacheprovider "$@" || status=$?
-check_ran_tests "$status" 'board-version run' "$@"
+  (
+    # shellcheck disable=SC1091
+    . scripts/board_env.sh
+    python -c 'import sys, cv2, numpy, rclpy, launch_ros
+print("[test] Python", sys.version.split()[0], "numpy", numpy.__version__, "OpenCV",
+      cv2.__version__, "ROS 2", __import__("os").environ["ROS_DISTRO"], "from",
+      rclpy.__file__.split("/lib/python")[0])'
+    # PY_VISION_VIVID=off: the vivid VM's tests are the main run's (docs/vivid.md says why).
+    PY_VISION_BROWSER=off PY_VISION_VIVID=off python -m pytest py_vision/test \
+      --ignore=py_vision/test/browser -p no:cacheprovider "$@"
+  ) || status=$?
+  check_ran_tests "$status" 'board-version run' "$@"
+}
+board_run "$@"

@@ -39,6 +39,7 @@ import xml.etree.ElementTree as ET
 import zlib
 
 from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
+from py_vision import ros_arguments
 
 PROFILE_NAME = 'fastdds_image_profile.xml'
 NS = 'http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles'
@@ -90,73 +91,19 @@ def localhost_only(environ=os.environ):
             or environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE') in ('LOCALHOST', 'OFF'))
 
 
-def _ros_arguments(args):
-    """Yield the arguments between --ros-args and its closing --, as rcl reads them."""
-    inside = False
-    for arg in args:
-        if arg == '--ros-args':
-            inside = True
-        elif arg == '--':
-            inside = False
-        elif inside:
-            yield arg
-
-
-def _params_file_size(path, node_names):
+def requested_size(args, fully_qualified_name, default=DEFAULT_SIZE):
     """
-    Return {name: value} of image_width/image_height in a parameter file.
+    Return the (width, height) a node's command line gives the node of that name.
 
-    From its wildcard entries, then those of node_names in turn, each more specific than the
-    ones before.
+    image_width and image_height as ros_arguments reads them (node_main gives rclpy the same
+    values); default where nothing says; SAFE_SIZE when a value or a file cannot be read, so a
+    misread never makes the segment too small.
     """
-    import yaml  # only when a file is given: PyYAML is optional on the boards
-    with open(path) as stream:
-        content = yaml.safe_load(stream)
-    found = {name: {} for name in ('**',) + tuple(node_names)}
-
-    def visit(tree, names):
-        for key, value in tree.items():
-            if key == 'ros__parameters' and isinstance(value, dict):
-                name = names[-1] if names else ''
-                name = '**' if name in ('*', '**') else name
-                if name in found:
-                    found[name].update({k: v for k, v in value.items()
-                                        if k in ('image_width', 'image_height')})
-            elif isinstance(value, dict):
-                visit(value, names + [str(key).rsplit('/', 1)[-1]])
-    visit(content, [])
-    sizes = {}
-    for entry in found.values():
-        sizes.update(entry)
-    return sizes
-
-
-def requested_size(args, node_name, default=DEFAULT_SIZE, file_entries=()):
-    """
-    Return the (width, height) a node's command line asks for, read without rclpy.
-
-    From `-p image_width:=W -p image_height:=H` and `--params-file FILE` (the command line
-    wins, as in rcl; in a file the node's own entry, then those of file_entries, then `/**`);
-    default where neither says; SAFE_SIZE when a value or a file cannot be read, so a misread
-    never makes the segment too small.
-    """
-    values = {}
-    given = {}
-    ros_args = list(_ros_arguments(args))
     try:
-        for flag, value in zip(ros_args, ros_args[1:]):
-            if flag == '--params-file':
-                values.update(_params_file_size(value, tuple(file_entries) + (node_name,)))
-        for flag, value in zip(ros_args, ros_args[1:]):
-            if flag in ('-p', '--param') and ':=' in value:
-                name, text = value.split(':=', 1)
-                name = name.rsplit(':', 1)[-1]
-                if name in ('image_width', 'image_height'):
-                    given[name] = text
-        values.update({name: int(text) for name, text in given.items()})
+        values = ros_arguments.given_parameters(args, fully_qualified_name)
         size = (int(values.get('image_width', default[0])),
                 int(values.get('image_height', default[1])))
-    except Exception:  # a light read: anything unexpected means "assume large frames"
+    except (ros_arguments.UnreadableArguments, TypeError, ValueError):
         return SAFE_SIZE
     return size if min(size) > 0 else SAFE_SIZE
 
@@ -166,14 +113,15 @@ def segment_size(publishes, args=(), node_name=''):
     if publishes == NO_IMAGES:
         return SMALL_SEGMENT
     if publishes == OWN_SIZE:
-        width, height = requested_size(args, node_name)
+        width, height = requested_size(args, ros_arguments.node_name(args, node_name))
     elif publishes == INPUT_SIZE:
-        # It cannot know what it will receive unless told: by its own image_width and
-        # image_height, or by the camera node's entry in the parameter file they share. Told
-        # nothing, it assumes the camera node's default size, as the camera node itself does:
-        # room for 1920x1080 would cost every plain `ros2 run` 15 MiB of RAM. A node that then
-        # receives larger frames says so (frame_fits).
-        width, height = requested_size(args, node_name, DEFAULT_SIZE, (CAMERA_NODE,))
+        # It cannot know what it will receive unless told: by what its own command line gives
+        # the camera node (image_width, image_height for every node, or the camera's section
+        # of the parameter file they share, as pipeline.launch.py gives them). Told nothing,
+        # it assumes the camera node's default size, as the camera node itself does: room for
+        # 1920x1080 would cost every plain `ros2 run` 15 MiB of RAM. A node that then receives
+        # larger frames says so (frame_fits).
+        width, height = requested_size(args, '/' + CAMERA_NODE)
     else:
         width, height = SAFE_SIZE
     return max(SMALL_SEGMENT, SEGMENT_FRAMES * width * height * BYTES_PER_PIXEL)

@@ -47,7 +47,7 @@ import threading
 import traceback
 from typing import Callable, ClassVar, Dict, List, Protocol, Sequence, Type
 
-from py_vision import dds
+from py_vision import dds, ros_arguments
 from py_vision.params import ConfigError, help_text, Spec
 from py_vision.throttled_log import ThrottledLog
 import rclpy
@@ -252,7 +252,9 @@ def run(node_class: Type[NodeProgram], args=None) -> int:
     install_quiet_signals()
     # The shared-memory segment is sized to what the node publishes, before parameters exist.
     dds.use_packaged_profile(node_class.PUBLISHES, argv, node_class.NODE_NAME)
-    error = _init_rclpy(argv)
+    # rclpy gets the parameters in py_vision's order (ros_arguments), whatever its own.
+    with ros_arguments.rclpy_arguments(argv, node_class.NODE_NAME) as rclpy_argv:
+        error = _init_rclpy(rclpy_argv)
     if error is not None:
         if _Stopping.signum is not None:
             return 0

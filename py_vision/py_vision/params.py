@@ -32,7 +32,6 @@ from typing import Any, Callable, Dict, Optional, Sequence, Tuple
 from py_vision.web_token import good_token, TOKEN_RULE
 from rcl_interfaces.msg import (
     FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
-import rclpy
 from rclpy.parameter import Parameter
 
 
@@ -196,24 +195,6 @@ def viewer_specs(display_default: str, displays: Sequence[str]) -> Tuple[Spec, .
              'loopback address (empty: a random one at each start, logged as the URL to open)',
              check=_good_token, accepted='empty, or ' + TOKEN_RULE),
     )
-
-
-def read_given(node_name: str, spec: Spec) -> Any:
-    """
-    Return the value the command line or a parameter file gives spec's parameter, checked.
-
-    For a choice that has to be made before the node is built (which class to build): a
-    short-lived node with the same name reads it, so that remapped names, namespaces,
-    parameter files and wildcards apply exactly as they will to the node itself. rclpy must
-    be initialised. Raises ConfigError for an unusable value.
-    """
-    probe = rclpy.create_node(node_name, start_parameter_services=False, enable_rosout=False)
-    try:
-        given = probe.declare_parameter(
-            spec.name, None, ParameterDescriptor(dynamic_typing=True)).value
-    finally:
-        probe.destroy_node()
-    return spec.default if given is None else spec.coerce(given)
 
 
 class Parameters:

@@ -49,7 +49,7 @@ import sys
 import time
 
 import cv2
-from py_vision import dds
+from py_vision import dds, ros_arguments
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
 from py_vision.camera_diagnostics import CameraMonitor
 from py_vision.capture import (
@@ -73,7 +73,6 @@ from rclpy.time import Time
 from sensor_msgs.msg import CameraInfo
 from sensor_msgs.srv import SetCameraInfo
 from std_msgs.msg import Header
-import yaml
 
 IMAGE_TOPIC = 'usb_camera/image'
 MANAGED = Spec('managed', False, 'run as a lifecycle node: configure opens the camera, activate '
@@ -495,37 +494,18 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
             logger.info('camera released before capturing began')
 
 
-def video_device_of(argv):
-    """Return the video_device a command line gives (-p, --param, --params-file), or default."""
-    device = next(spec.default for spec in USBImagePublisher.OWN_PARAMETERS
-                  if spec.name == 'video_device')
-    words = list(argv[1:])
-    for flag, word in zip(words, words[1:]):
-        if flag in ('-p', '--param') and word.startswith('video_device:='):
-            device = word.split(':=', 1)[1].strip('\'"')
-        elif flag == '--params-file':
-            try:
-                with open(word) as stream:
-                    content = yaml.safe_load(stream)
-            except (OSError, yaml.YAMLError):
-                continue  # the node itself says what is wrong with the file
-            for section in (_entry(content, '/**'), _entry(content, USBImagePublisher.NODE_NAME)):
-                value = _entry(_entry(section, 'ros__parameters'), 'video_device')
-                if value is not None:
-                    device = str(value)
-    return device
-
-
-def _entry(mapping, key):
-    """Return mapping[key], or None when mapping is not a mapping (a params file of any shape)."""
-    return mapping.get(key) if isinstance(mapping, dict) else None
-
-
 def list_formats(argv):
     """Print what the camera offers (--list-formats); return the exit status."""
-    device = video_device_of(argv)
+    name = USBImagePublisher.NODE_NAME
     try:
-        sys.stdout.write(device_listing(device))
+        device = ros_arguments.given_parameters(argv, ros_arguments.node_name(argv, name)).get(
+            'video_device', next(spec.default for spec in USBImagePublisher.OWN_PARAMETERS
+                                 if spec.name == 'video_device'))
+    except ros_arguments.UnreadableArguments as error:
+        sys.stderr.write('%s: invalid command line arguments: %s\n' % (name, error))
+        return 2
+    try:
+        sys.stdout.write(device_listing(str(device)))
     except SourceError as error:
         sys.stderr.write('%s: %s\n' % (USBImagePublisher.NODE_NAME, error))
         return 1

@@ -32,9 +32,7 @@ settings.load_profile('py_vision')
 
 # Tests never hear each other or the network: every ROS participant (in-process peers and the
 # node processes, which inherit os.environ) keeps discovery on this host.
-os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-os.environ.pop('ROS_LOCALHOST_ONLY', None)
-os.environ.pop('ROS_STATIC_PEERS', None)
+ros_harness.with_discovery(os.environ, 'localhost')
 
 if not ros_harness.SITE_PACKAGES.is_dir():
     raise pytest.UsageError(
@@ -178,3 +176,48 @@ def vivid(vivid_session):
     skipped with the reason, and fails in CI.
     """
     return vivid_session.vm_or_skip()
+
+
+# The browser tests' Chromium: headless, no first-run work, nothing fetched from the network.
+CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic',
+                 '--no-first-run', '--disable-background-networking',
+                 '--disable-component-update', '--disable-sync']
+
+
+def chromium_path():
+    """Return the Chromium executable, or None when there is none."""
+    explicit = os.environ.get('CHROMIUM')
+    if explicit:
+        return explicit
+    return shutil.which('chromium') or shutil.which('chromium-browser')
+
+
+@pytest.fixture
+def browser(tmp_path):
+    """
+    Yield a fresh headless Chromium context (with its own profile directory).
+
+    Needs Playwright and Chromium: without them the test is skipped with the reason, and fails
+    in CI (CI=true), which must run it.
+    """
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        sync_playwright = None
+    missing = None
+    if sync_playwright is None:
+        missing = 'Playwright is not installed (pip install playwright)'
+    elif chromium_path() is None:
+        missing = 'Chromium is not installed (apt-get install chromium)'
+    if missing:
+        if os.environ.get('CI', '').lower() in ('1', 'true', 'yes'):
+            pytest.fail('%s, and CI requires the browser test' % missing)
+        pytest.skip('%s; CI runs this test' % missing)
+    with sync_playwright() as playwright:
+        context = playwright.chromium.launch_persistent_context(
+            str(tmp_path / 'profile'), executable_path=chromium_path(), headless=True,
+            args=CHROMIUM_ARGS, viewport={'width': 1280, 'height': 800}, device_scale_factor=1)
+        try:
+            yield context
+        finally:
+            context.close()

@@ -47,7 +47,6 @@ import zlib
 
 import cv2
 import numpy as np
-import yaml
 
 HERE = Path(__file__).resolve().parent
 SOURCE = HERE / 'uvc_emulator' / 'uvc_emulator.c'
@@ -69,14 +68,13 @@ _MAX_CONTROLS = 48
 _SERVED = struct.Struct('<QIIII')
 _SERVED_SLOTS = 4096
 _SERVED_CORRUPT = 1
-# Control types (enum v4l2_ctrl_type) and the size of one element of each.
+# Control types (enum v4l2_ctrl_type: camera_model.CONTROL_TYPES) and the size of one element.
 _TYPES = {'integer': 1, 'boolean': 2, 'menu': 3, 'button': 4, 'integer64': 5, 'string': 7,
           'bitmask': 8, 'integer_menu': 9, 'u8': 0x100, 'u16': 0x101, 'u32': 0x102,
           'area': 0x106}
 _ELEM_SIZES = {'integer64': 8, 'u8': 1, 'u16': 2, 'area': 8}
 _FLAG_READ_ONLY = 0x4
 _FAULTS = ('stalled', 'denied')
-EFFECTS = ('brightness', 'contrast', 'saturation', 'gain', 'exposure', 'white_balance')
 
 
 def jpeg_digest(data):
@@ -256,51 +254,46 @@ def jpeg_tables():
     return path
 
 
+def model_path(model):
+    """Return the data file a model names: a path, the synthetic camera's, or one in CAMERAS."""
+    if str(model).endswith('.yaml'):
+        return Path(model)
+    if model == 'synthetic':
+        from py_vision.capture import camera_model
+        return camera_model.SYNTHETIC
+    return CAMERAS / ('%s.yaml' % model)
+
+
 def load_model(model):
     """
     Return a camera's data file as a dict, with what it implies worked out.
 
+    The file is read as the synthetic camera reads its own (py_vision.capture.camera_model).
     Each format gets its `description` (the pixel format table's unless the file gives one),
     `compressed` and `frames`: [{'width', 'height', 'rates', 'intervals'}], the rates offered
-    at that size (raw formats: those whose frames fit in `usb_bandwidth`, at least the
-    lowest), as V4L2 intervals (1, rate); each control gets its `index` in the shared state.
+    at that size (camera_model.bus_rates: raw formats those whose frames fit in
+    `usb_bandwidth`), as V4L2 intervals (1, rate); each control gets its `index` in the shared
+    state and the defaults of what the file leaves out.
     """
-    path = Path(model) if str(model).endswith('.yaml') else CAMERAS / ('%s.yaml' % model)
-    data = yaml.safe_load(path.read_text())
-    data['model'] = path.stem
-    budget = data.get('usb_bandwidth', 24000000)
-    for fmt in data['formats']:
-        pixel_format = _pixel_format(fmt['fourcc'])
-        if pixel_format is None:
-            raise ValueError('%s: py_vision has no pixel format %s' % (path, fmt['fourcc']))
-        fmt.setdefault('description', pixel_format.description)
-        compressed = fmt['compressed'] = pixel_format.compressed
-        fmt['frames'] = []
-        for width, height in fmt['sizes']:
-            rates = sorted(fmt['rates'], reverse=True)
-            if not compressed:
-                fitting = [r for r in rates
-                           if width * height * pixel_format.bus_bytes * r <= budget]
-                rates = fitting or rates[-1:]
-            fmt['frames'].append({'width': width, 'height': height, 'rates': rates,
-                                  'intervals': [(1, r) for r in rates]})
+    from py_vision.capture import camera_model
+    path = model_path(model)
+    described = camera_model.load(path)
+    data = described.data
+    data['model'] = described.name
+    data['default_size'] = list(described.default_size)
+    for fmt, offered in zip(data['formats'], described.formats):
+        fmt['description'] = offered.description
+        fmt['compressed'] = offered.pixel_format.compressed
+        fmt['frames'] = [{'width': size.width, 'height': size.height, 'rates': list(size.rates),
+                          'intervals': [(1, rate) for rate in size.rates]}
+                         for size in described.frame_sizes(offered)]
+    data['controls'] = data.get('controls') or []
     if len(data['controls']) > _MAX_CONTROLS:
         raise ValueError('%s: at most %d controls' % (path, _MAX_CONTROLS))
-    by_name = {c['name']: c for c in data['controls']}
     for index, control in enumerate(data['controls']):
         control['index'] = index
-        if control['type'] not in _TYPES:
-            raise ValueError('%s: %s has type %r, not one of %s'
-                             % (path, control['name'], control['type'], ', '.join(_TYPES)))
         for key in ('min', 'max', 'step', 'default'):
             control.setdefault(key, 0)   # a button, an area: no range
-        if control.get('effect') not in (None,) + EFFECTS:
-            raise ValueError('%s: %s has effect %r, not one of %s'
-                             % (path, control['name'], control['effect'], ', '.join(EFFECTS)))
-        for master in control.get('inactive_unless', {}):
-            if master not in by_name:
-                raise ValueError('%s: %s depends on unknown control %s'
-                                 % (path, control['name'], master))
     return data
 
 
@@ -314,13 +307,15 @@ class EmulatedCamera:
     `stalled` and `denied` (start with that fault), `corrupt_every` (overrides the data
     file's broken-JPEG period; 0: never), `drop_every` (every N-th frame lost on the way: the
     buffers' sequence skips it) and `error_every` (every N-th buffer comes back flagged
-    V4L2_BUF_FLAG_ERROR, empty). `close()` unplugs it and removes its directory (the
+    V4L2_BUF_FLAG_ERROR, empty), `streamon_errno` (VIDIOC_STREAMON fails with that errno, as
+    uvcvideo's does with ENOSPC when the USB bus has no bandwidth left). `close()` unplugs it
+    and removes its directory (the
     `emulated_camera` fixture does this after the test).
     """
 
     def __init__(self, state_dir, model='webcam_1080p', node=40, **faults):
         unknown = set(faults) - set(_FAULTS) - {'serial', 'corrupt_every', 'usb_port',
-                                                'drop_every', 'error_every'}
+                                                'drop_every', 'error_every', 'streamon_errno'}
         if unknown:
             raise TypeError('unknown option(s) %s' % ', '.join(sorted(unknown)))
         self.model = load_model(model)
@@ -356,7 +351,8 @@ class EmulatedCamera:
                  'corrupt_every %d' % int(corrupt.get('every', 0)),
                  'corrupt_mode %s' % corrupt.get('mode', 'truncate'),
                  'drop_every %d' % int(faults.get('drop_every', 0)),
-                 'error_every %d' % int(faults.get('error_every', 0))]
+                 'error_every %d' % int(faults.get('error_every', 0)),
+                 'streamon_errno %d' % int(faults.get('streamon_errno', 0))]
         for fmt in m['formats']:
             pixel_format = _pixel_format(fmt['fourcc'])
             flags = 1 if fmt['compressed'] else 0

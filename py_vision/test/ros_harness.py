@@ -21,6 +21,7 @@ stopped by the test; waits poll for a condition with a deadline.
 """
 
 import fcntl
+import importlib.util
 import os
 from pathlib import Path
 import random
@@ -64,6 +65,47 @@ SITE_PACKAGES = PREFIX / 'lib' / ('python%d.%d' % sys.version_info[:2]) / 'site-
 SHARE = PREFIX / 'share' / PACKAGE
 # How many lines of a node's log a failure message shows.
 LOG_TAIL_LINES = 40
+
+
+def _rclpy_version():
+    """Return the (major, minor, patch) of the rclpy tests import, from its package.xml."""
+    # <prefix>/lib/pythonX.Y/site-packages/rclpy/__init__.py; <prefix>/share/rclpy/package.xml
+    prefix = Path(importlib.util.find_spec('rclpy').origin).parents[4]
+    text = (prefix / 'share' / 'rclpy' / 'package.xml').read_text()
+    return tuple(int(part) for part in re.search(
+        r'<version>(\d+)\.(\d+)\.(\d+)</version>', text).groups())
+
+
+RCLPY_VERSION = _rclpy_version()
+# rclpy 3.x is ROS 2 Humble's (the boards'); Iron has 4.x, Jazzy 7.x.
+ON_HUMBLE = RCLPY_VERSION < (4,)
+# Why a test of a discovery setting Humble does not have is skipped there.
+FROM_IRON = 'ROS_AUTOMATIC_DISCOVERY_RANGE and ROS_STATIC_PEERS exist from Iron on (Humble: ' \
+    'ROS_LOCALHOST_ONLY)'
+
+
+def with_discovery(env, scope='localhost', peers=''):
+    """
+    Set ROS discovery in env (a dict, or os.environ) to scope, as this distribution spells it.
+
+    scope: 'localhost' (this host only), 'subnet' (the network) or 'off' (this process only,
+    Iron on). Humble knows only ROS_LOCALHOST_ONLY, which Iron on deprecate (with a warning at
+    every start) for ROS_AUTOMATIC_DISCOVERY_RANGE. peers: ROS_STATIC_PEERS, from Iron on;
+    Humble's discovery is multicast alone. Returns env.
+    """
+    for name in ('ROS_LOCALHOST_ONLY', 'ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_STATIC_PEERS'):
+        env.pop(name, None)
+    if ON_HUMBLE:
+        if scope == 'off':
+            raise ValueError('discovery off needs Iron or later: ' + FROM_IRON)
+        if scope == 'localhost':
+            env['ROS_LOCALHOST_ONLY'] = '1'
+    else:
+        env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = scope.upper()
+        if peers:
+            env['ROS_STATIC_PEERS'] = peers
+    return env
+
 
 # Fast DDS accepts domain ids up to 232 with the default port mapping.
 _DOMAIN_RANGE = range(1, 200)
@@ -111,10 +153,9 @@ def node_env(domain_id, log_dir):
     rcl log files in log_dir.
     """
     env = installed_env()
-    env.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
-               PYTHONUNBUFFERED='1', RCUTILS_COLORIZED_OUTPUT='0', ROS_LOG_DIR=log_dir)
-    env.pop('ROS_LOCALHOST_ONLY', None)
-    return env
+    env.update(ROS_DOMAIN_ID=str(domain_id), PYTHONUNBUFFERED='1', RCUTILS_COLORIZED_OUTPUT='0',
+               ROS_LOG_DIR=log_dir)
+    return with_discovery(env, 'localhost')
 
 
 class DomainId:

@@ -24,6 +24,8 @@ The camera layer: frame sources, the device's controls and the capture loop, wit
 - `v4l2`: V4L2 devices: what they are and offer, their controls (ioctls);
 - `v4l2_stream`: V4L2 cameras streamed by py_vision (mmap buffers);
 - `video_file`: a video file played as a camera;
+- `camera_model`: a camera described by a data file (the synthetic camera's and the test
+  cameras'), and the USB bus's rule of the rates a camera offers;
 - `synthetic_picture` and `synthetic_device`: the synthetic camera, its picture and the device;
 - `camera`: `Camera`, a source opened and negotiated, with its controls by V4L2 id;
 - `loop`: `CaptureLoop`, open / read / lose / reopen / close on a thread of its own.

@@ -138,7 +138,7 @@ class _JpegCheck:
         if end < 8 or view[end - 2] != 0xFF or view[end - 1] != 0xD9:
             return False
         header = self._header
-        if header is not None and data[:len(header)].tobytes() == header:
+        if header is not None and view[:len(header)] == header:
             return True
         length = _header_length(view, end)
         if length:

@@ -302,7 +302,11 @@ class CaptureLoop:
                     failed_reads = 0
                 continue
             failed_reads = 0
-            self._count_dropped(frame.index)
+            # Frames the device's numbering skips before this one never came: dropped.
+            index, last = frame.index, self._last_index
+            self._last_index = index
+            if last is not None and index is not None and index > last + 1:
+                self._dropped += index - last - 1
             if frame.capture_time is not None and frame.capture_time < self._not_before:
                 self._stale += 1
                 continue
@@ -323,12 +327,6 @@ class CaptureLoop:
                 self._count_corrupt()
                 continue
             self._frames += 1
-
-    def _count_dropped(self, index: Optional[int]) -> None:
-        """Count the frames the device's numbering skips before this one."""
-        last, self._last_index = self._last_index, index
-        if last is not None and index is not None and index > last + 1:
-            self._dropped += index - last - 1
 
     def _count_error(self) -> None:
         self._errors += 1

@@ -35,8 +35,7 @@ import cv2
 import numpy as np
 
 __all__ = ['COLOUR_OUTPUTS', 'find', 'FORMATS', 'fourcc_code', 'fourcc_text', 'JPEG_FORMATS',
-           'names_accepted', 'nv24_as_yuyv', 'OPENCV_BGR', 'OUTPUTS', 'PixelFormat', 'Plane',
-           'UVC_WEBCAM']
+           'names_accepted', 'nv24_as_yuyv', 'OPENCV_BGR', 'OUTPUTS', 'PixelFormat', 'Plane']
 
 # What a frame converts to; 'native' is the camera's own pixels.
 OUTPUTS = ('bgr8', 'rgb8', 'mono8', 'mono16', 'native')
@@ -401,8 +400,6 @@ def _table():
 
 
 JPEG_FORMATS = ('MJPG', 'JPEG')
-# What a USB webcam offers: raw YUYV, limited by the bus, and the camera's own JPEG.
-UVC_WEBCAM = ('YUYV', 'MJPG')
 # Every format, in the order `auto` prefers them when they cost the same.
 FORMATS: Dict[str, PixelFormat] = _table()
 # The layout of OpenCV's own images (what a video file gives).

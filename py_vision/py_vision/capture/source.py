@@ -136,7 +136,7 @@ class StreamFormat:
         return find(self.fourcc)
 
 
-@dataclass
+@dataclass(slots=True)
 class Frame:
     """
     One captured frame: the bytes as the device sent them, converted only on demand.

@@ -23,21 +23,23 @@ with ``cv2.COLOR_YUV2BGR_YUYV`` as OpenCV's V4L2 backend does, and paces frames 
 with a single buffer: a caller that falls behind gets the newest frame and the frames in between
 are lost (their indices are skipped). read() returns a new array every time.
 
-It offers what a USB webcam offers (`UVC_WEBCAM` of the pixel format table: YUYV and MJPEG),
-or any formats of the table it is asked for. A raw format is limited by the bus to 24 MB/s:
-the highest of 30, 25, 20, 15, 10 and 5 fps whose frames fit (YUYV, two bytes a pixel:
-640x480 at 30, 1280x720 at 10, 1920x1080 at 5 fps); a compressed one runs at the requested rate
-at any size. Raw frames are made from its YUYV picture the way the table says
-(`PixelFormat.from_yuyv`). The FOURCC is chosen with ``set(CAP_PROP_FOURCC)`` and, as in
-OpenCV's V4L2 backend, the first format offered is the one it opens with; with
+What it is comes from its data file (camera_model.SYNTHETIC, the format the tests' emulated
+cameras are described in): the formats a USB webcam offers (YUYV and MJPEG), or any formats of
+the pixel format table it is asked for, at the file's sizes and rates; its controls; the bus's
+bandwidth. A raw format is limited by the bus (camera_model.bus_rates: the highest listed
+rate whose frames fit; YUYV, two bytes a pixel: 640x480 at 30, 1280x720 at 10, 1920x1080 at
+5 fps); a compressed one runs at the requested rate at any size. Raw frames are made from its
+YUYV picture the way the table says (`PixelFormat.from_yuyv`). The FOURCC is chosen with
+``set(CAP_PROP_FOURCC)`` and, as in OpenCV's V4L2 backend, the first format offered is the one
+it opens with; with
 ``CAP_PROP_CONVERT_RGB`` off read() returns the buffer as the camera sent it (a 1-D uint8
 array: the JPEG's bytes in MJPEG mode), otherwise a BGR image. As a FrameSource (`configure`,
 `next_frame`, ...) it hands out the buffer as sent.
 
-Its controls (`CONTROLS`, a ControlInfo table with V4L2 ids and names as uvcvideo reports them)
-are read with controls() and set with set_control() (and, as OpenCV does, through the
-CAP_PROP_* properties), and change the picture visibly and deterministically; as on a UVC
-camera, a control an automatic mode owns is inactive while that mode is on.
+Its controls (the data file's, with V4L2 ids and names as uvcvideo reports them) are read with
+controls() and set with set_control() (and, as OpenCV does, through the CAP_PROP_* properties),
+and change the picture visibly and deterministically; as on a UVC camera, a control an
+automatic mode holds (the file's inactive_unless) is inactive while that mode is on.
 
 Faults for tests, as constructor options or in a ``video_device`` string
 (`SyntheticDevices.open`): ``fail_open`` (never opens), ``stop_after`` (unplugged after N
@@ -56,42 +58,20 @@ from urllib.parse import parse_qsl
 
 import cv2
 import numpy as np
-from py_vision.capture.controls import (
-    BOOL, CID, ControlInfo, EXPOSURE_APERTURE_PRIORITY, EXPOSURE_MANUAL, holder, INT, MENU)
+from py_vision.capture import camera_model
+from py_vision.capture.controls import CID, ControlInfo, MENU
 from py_vision.capture.pacing import FramePacer
-from py_vision.capture.pixel_formats import find, FORMATS, PixelFormat, UVC_WEBCAM
-from py_vision.capture.source import (
-    Clock, Frame, FrameFormat, FrameSize, MONOTONIC, StreamFormat)
+from py_vision.capture.pixel_formats import find, FORMATS, PixelFormat
+from py_vision.capture.source import Clock, Frame, FrameFormat, MONOTONIC, StreamFormat
 from py_vision.capture.synthetic_picture import (
     apply_controls, frame_layout, mjpeg_encoder, yuyv_to_bgr)
 
 MAX_SIZE = 8192
 MAX_FPS = 1000.0
-# USB 2.0 high speed carries about 24 MB/s of isochronous video; UVC cameras offer these rates.
-BUS_BYTES_PER_S = 24e6
-UVC_RATES = (30.0, 25.0, 20.0, 15.0, 10.0, 5.0)
-# The sizes it lists when asked (it honours any size it is set to, as a scaler would).
-LISTED_SIZES = ((160, 120), (320, 240), (640, 480), (800, 600), (1280, 720), (1920, 1080))
 _OPTIONS = 'fail_open, stop_after, unplugged_for, fail_every, formats'
 
-# The camera's controls, as a UVC camera reports them (V4L2 names, ids, ranges, defaults).
-CONTROLS = (
-    ControlInfo(CID.BRIGHTNESS, 'Brightness', INT, -64, 64, 1, 0),
-    ControlInfo(CID.CONTRAST, 'Contrast', INT, 0, 64, 1, 32),
-    ControlInfo(CID.SATURATION, 'Saturation', INT, 0, 128, 1, 64),
-    ControlInfo(CID.AUTO_WHITE_BALANCE, 'White Balance, Automatic', BOOL, 0, 1, 1, 1),
-    ControlInfo(CID.GAIN, 'Gain', INT, 0, 100, 1, 0),
-    ControlInfo(CID.WHITE_BALANCE_TEMPERATURE, 'White Balance Temperature', INT, 2800, 6500,
-                1, 4600),
-    ControlInfo(CID.SHARPNESS, 'Sharpness', INT, 0, 6, 1, 3),
-    ControlInfo(CID.EXPOSURE_AUTO, 'Auto Exposure', MENU, 0, 3, 1, EXPOSURE_APERTURE_PRIORITY,
-                menu=((EXPOSURE_MANUAL, 'Manual Mode'),
-                      (EXPOSURE_APERTURE_PRIORITY, 'Aperture Priority Mode'))),
-    ControlInfo(CID.EXPOSURE_ABSOLUTE, 'Exposure Time, Absolute', INT, 3, 2047, 1, 166),
-    ControlInfo(CID.FOCUS_ABSOLUTE, 'Focus, Absolute', INT, 0, 250, 1, 0),
-    ControlInfo(CID.FOCUS_AUTO, 'Focus, Automatic Continuous', BOOL, 0, 1, 1, 1),
-)
-_CONTROL_OF = {control.cid: control for control in CONTROLS}
+MODEL = camera_model.load(camera_model.SYNTHETIC)
+_CONTROL_OF = {control.info.cid: control for control in MODEL.controls}
 # OpenCV's V4L2 backend maps these properties onto the controls.
 _PROPS = {
     cv2.CAP_PROP_BRIGHTNESS: CID.BRIGHTNESS, cv2.CAP_PROP_CONTRAST: CID.CONTRAST,
@@ -101,17 +81,23 @@ _PROPS = {
     cv2.CAP_PROP_AUTO_EXPOSURE: CID.EXPOSURE_AUTO, cv2.CAP_PROP_EXPOSURE: CID.EXPOSURE_ABSOLUTE,
     cv2.CAP_PROP_FOCUS: CID.FOCUS_ABSOLUTE, cv2.CAP_PROP_AUTOFOCUS: CID.FOCUS_AUTO,
 }
-_DEFAULTS = {control.cid: control.default for control in CONTROLS}
+_DEFAULTS = {control.info.cid: control.info.default for control in MODEL.controls}
+
+
+def _model_format(pixel_format: PixelFormat) -> camera_model.ModelFormat:
+    """Return a format as the camera offers it: the file's, or any other at the first's sizes."""
+    for offered in MODEL.formats:
+        if offered.pixel_format is pixel_format:
+            return offered
+    first = MODEL.formats[0]
+    return camera_model.ModelFormat(pixel_format, pixel_format.description, first.sizes,
+                                    first.rates)
 
 
 def bus_max_fps(pixel_format: PixelFormat, width: int, height: int) -> float:
-    """Return the highest UVC rate at which frames of a format fit the USB 2.0 bus."""
-    if pixel_format.compressed:
-        return UVC_RATES[0]
-    for rate in UVC_RATES:
-        if width * height * pixel_format.bus_bytes * rate <= BUS_BYTES_PER_S:
-            return rate
-    return UVC_RATES[-1]
+    """Return the highest listed rate at which frames of a format fit the camera's bus."""
+    return camera_model.bus_rates(pixel_format, width, height,
+                                  _model_format(pixel_format).rates, MODEL.bandwidth)[0]
 
 
 class _DeviceState:
@@ -184,7 +170,8 @@ class SyntheticCamera:
     """
 
     def __init__(self, width=640, height=480, fps=10.0, *, fail_open=False, stop_after=None,
-                 unplugged_for=None, fail_every=None, formats=UVC_WEBCAM,
+                 unplugged_for=None, fail_every=None,
+                 formats=tuple(f.pixel_format.fourcc for f in MODEL.formats),
                  name='synthetic', devices: Optional[SyntheticDevices] = None):
         w, h, rate = _check_size(width), _check_size(height), _check_fps(fps)
         if w is None or h is None:
@@ -382,27 +369,31 @@ class SyntheticCamera:
         """Return the formats it offers at its listed sizes, with the rates each reaches."""
         found = []
         for pixel_format in self._offered:
-            sizes = []
-            for width, height in LISTED_SIZES:
-                top = bus_max_fps(pixel_format, width, height)
-                sizes.append(FrameSize(width, height, tuple(r for r in UVC_RATES if r <= top)))
+            offered = _model_format(pixel_format)
             # A scaler: any size; a compressed format at any rate, raw ones at the bus's rates.
-            found.append(FrameFormat(pixel_format.fourcc, pixel_format.description,
-                                     tuple(sizes), (2, 1, MAX_SIZE, MAX_SIZE),
+            found.append(FrameFormat(pixel_format.fourcc, offered.description,
+                                     MODEL.frame_sizes(offered), (2, 1, MAX_SIZE, MAX_SIZE),
                                      (0.1, MAX_FPS) if pixel_format.compressed else None))
         return found
 
     def controls(self) -> List[ControlInfo]:
         """Return the camera's controls with their values; held ones inactive in auto mode."""
-        return [control.with_value(self._controls[control.cid],
-                                   holder(control.cid, self._controls) is not None)
-                for control in CONTROLS]
+        return [control.info.with_value(self._controls[control.info.cid],
+                                        self._held(control))
+                for control in MODEL.controls]
+
+    def _held(self, control: camera_model.ModelControl) -> bool:
+        """Return whether an automatic mode holds the control now (it is inactive)."""
+        if control.held_by is None:
+            return False
+        mode, free = control.held_by
+        return self._controls[mode] != free
 
     def set_control(self, cid: int, value: int) -> Optional[str]:
         """Set a control as a driver does; return why it was refused, or None."""
-        control = _CONTROL_OF.get(cid)
-        if control is None:
+        if cid not in _CONTROL_OF:
             return 'the device has no such control'
+        control = _CONTROL_OF[cid].info
         if not self._opened:
             return 'the device is not open'
         if not control.minimum <= value <= control.maximum or (

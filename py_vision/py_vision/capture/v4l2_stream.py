@@ -80,9 +80,11 @@ BUF_FLAG_TIMESTAMP_MASK = 0xE000
 BUF_FLAG_TIMESTAMP_MONOTONIC = 0x2000
 FIELD_ANY = 0
 BUFFERS = 4
-# Where _BUFFER's values hold each field, and where `memory` lies in the structure.
-_INDEX, _BYTESUSED, _FLAGS, _SEC, _USEC, _SEQUENCE, _OFFSET, _LENGTH = 0, 2, 3, 5, 6, 17, 19, 20
+# Where _BUFFER's values hold a mapped buffer's place, and where `memory` lies in it.
+_OFFSET, _LENGTH = 19, 20
 _MEMORY_AT = struct.calcsize('@5Ill2I8BI')
+# What a dequeued buffer says, the rest skipped: index, bytesused, flags, timestamp, sequence.
+_DEQUEUED = struct.Struct('@I4xII4xll16xI')
 
 
 def _buffer_for(index: int) -> bytes:
@@ -124,16 +126,17 @@ class V4L2Source:
             raise V4L2Error('it cannot stream (no V4L2 streaming I/O)')
         self._fd = self.device.fd
         self._maps: List[mmap.mmap] = []
+        self._arrays: List[np.ndarray] = []     # each buffer's bytes, made once
         self._held: Optional[int] = None        # the buffer the last frame's bytes are in
         self._streaming = False
         self._format: Optional[StreamFormat] = None
         self._pixel_format: Optional[PixelFormat] = None
-        self._timeout_ms = 1000
+        self._timeout = 1.0
         self._whole = 0          # the bytes of a whole raw frame (0: compressed)
         self._wake_read, self._wake_write = os.pipe2(os.O_NONBLOCK | os.O_CLOEXEC)
-        self._poll = select.poll()
-        self._poll.register(self._fd, select.POLLIN)
-        self._poll.register(self._wake_read, select.POLLIN)
+        self._poll = select.epoll()
+        self._poll.register(self._fd, select.EPOLLIN)
+        self._poll.register(self._wake_read, select.EPOLLIN)
 
     # --- formats and controls: the device's own answers ------------------------------------
 
@@ -168,7 +171,7 @@ class V4L2Source:
         if pixel_format is not None and not pixel_format.compressed:
             self._whole = pixel_format.frame_bytes(width, height, bytesperline)
         # A frame comes within a few periods of a slow camera, within a second of any other.
-        self._timeout_ms = int(1000 * max(1.0, 3.0 / max(rate or fps, 1e-3)))
+        self._timeout = max(1.0, 3.0 / max(rate or fps, 1e-3))
         return self._format
 
     def _set_rate(self, fps: float) -> float:
@@ -222,8 +225,10 @@ class V4L2Source:
                 info = bytearray(_BUFFERS[index])
                 fcntl.ioctl(self._fd, VIDIOC_QUERYBUF, info)
                 fields = _BUFFER.unpack(info)
-                self._maps.append(mmap.mmap(self._fd, fields[_LENGTH], mmap.MAP_SHARED,
-                                            mmap.PROT_READ, offset=fields[_OFFSET]))
+                mapped = mmap.mmap(self._fd, fields[_LENGTH], mmap.MAP_SHARED, mmap.PROT_READ,
+                                   offset=fields[_OFFSET])
+                self._maps.append(mapped)
+                self._arrays.append(np.frombuffer(mapped, np.uint8))
         except OSError as error:
             self._free_buffers()
             raise _stream_error('mapping the buffers', error) from None
@@ -260,18 +265,18 @@ class V4L2Source:
                 fcntl.ioctl(fd, VIDIOC_QBUF, bytearray(_BUFFERS[held]))
             except OSError:
                 return None
-        timeout, buffer = self._timeout_ms, bytearray(_DEQUEUE)
+        timeout, buffer = self._timeout, bytearray(_DEQUEUE)
         for _ in range(100):
             events = self._poll.poll(timeout)
-            if not events or events[-1][0] != fd:   # a timeout, or interrupt()
-                return self._woken(events)
+            if not events or any(ready == self._wake_read for ready, _ in events):
+                return self._woken(events)   # a timeout, or interrupt()
             try:
                 fcntl.ioctl(fd, VIDIOC_DQBUF, buffer)
-                return self._frame(_BUFFER.unpack(buffer))
+                return self._frame(*_DEQUEUED.unpack_from(buffer))
             except BlockingIOError:
-                timeout = 10   # readable, yet nothing to take: ask again, briefly
+                timeout = 0.01   # readable, yet nothing to take: ask again, briefly
             except OSError:
-                return None    # unplugged, or the stream failed for good
+                return None      # unplugged, or the stream failed for good
         return None
 
     def _woken(self, events) -> None:
@@ -282,24 +287,19 @@ class V4L2Source:
             except BlockingIOError:
                 pass
 
-    def _frame(self, fields) -> Frame:
-        index, flags = fields[_INDEX], fields[_FLAGS]
+    def _frame(self, index, used, flags, seconds, microseconds, sequence) -> Frame:
         captured = None
         if flags & BUF_FLAG_TIMESTAMP_MASK == BUF_FLAG_TIMESTAMP_MONOTONIC:
-            captured = fields[_SEC] + fields[_USEC] * 1e-6
+            captured = seconds + microseconds * 1e-6
         stream = self._format
-        frame = Frame(fields[_SEQUENCE], captured, self._pixel_format, stream.width,
-                      stream.height, bytesperline=stream.bytesperline)
         if flags & BUF_FLAG_ERROR:
-            frame.error = True
             self._queue_back(index)
-            return frame
+            return Frame(sequence, captured, self._pixel_format, stream.width, stream.height,
+                         error=True)
         self._held = index
-        mapped = self._maps[index]
-        used = min(fields[_BYTESUSED], len(mapped))
-        frame.data = np.frombuffer(mapped, np.uint8, used)
-        frame.corrupt = used < self._whole   # a raw frame cut short
-        return frame
+        data = self._arrays[index][:used]    # no more than the buffer, if bytesused says more
+        return Frame(sequence, captured, self._pixel_format, stream.width, stream.height,
+                     data, stream.bytesperline, corrupt=len(data) < self._whole)
 
     def _queue_back(self, index: int) -> None:
         try:
@@ -321,6 +321,7 @@ class V4L2Source:
         self.stop()
         self._free_buffers()
         self.device.close()
+        self._poll.close()
         os.close(self._wake_read)
         os.close(self._wake_write)
 
@@ -328,6 +329,7 @@ class V4L2Source:
         self.stop()
         if not self._maps:
             return
+        self._arrays = []
         for mapped in self._maps:
             try:
                 mapped.close()

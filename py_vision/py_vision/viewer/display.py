@@ -25,6 +25,7 @@ once.
 """
 
 import os
+import re
 import socket
 import sys
 import threading
@@ -70,9 +71,33 @@ def window_unavailable_reason():
     try:
         cv2.namedWindow('py_vision', cv2.WINDOW_AUTOSIZE)
         cv2.destroyWindow('py_vision')
-    except cv2.error:
-        return 'this OpenCV has no GUI support (opencv-python-headless)'
+    except cv2.error as error:
+        backend = gui_backend()
+        if backend is None or 'not implemented' in str(error):
+            return 'this OpenCV has no GUI support (opencv-python-headless)'
+        # A GUI OpenCV (the boards' has GTK3) that cannot open a window on this display:
+        # say so with OpenCV's own reason, e.g. "Can't initialize GTK backend".
+        return "OpenCV's %s GUI cannot open a window on %s: %s" % (
+            backend, 'DISPLAY=%s' % display if display else 'WAYLAND_DISPLAY=%s' % wayland,
+            _opencv_reason(error))
     return None
+
+
+def gui_backend():
+    """Return the GUI this OpenCV was built with ('GTK3', 'QT5', ...), or None without one."""
+    for line in cv2.getBuildInformation().splitlines():
+        name, _, value = line.strip().partition(':')
+        if name == 'GUI':
+            value = value.strip()
+            return None if value in ('', 'NONE') else value
+    return None
+
+
+def _opencv_reason(error):
+    """Return the reason in a cv2.error's text, without where in OpenCV's sources it was raised."""
+    text = str(error).strip()
+    found = re.search(r'error: \([^)]*\) (.*?)(?: in function .*)?$', text)
+    return found.group(1) if found else text
 
 
 class Display:

@@ -22,7 +22,6 @@ import cv2
 import numpy as np
 from py_vision.capture.synthetic_picture import read_frame_index
 from ros_harness import wait_until
-from test_web_browser import browser  # noqa: F401 (the fixture)
 from video_clip import ClipPublisher, FRAMES, HEIGHT, WIDTH
 
 URL_LINE = r'viewer at (http://[^\s/]+:\d+/)'
@@ -51,7 +50,7 @@ def shown_index(page):
 
 
 def test_the_page_decodes_the_cameras_h264_and_the_node_decodes_nothing(
-        launch, peer, browser):  # noqa: F811 (the fixture)
+        launch, peer, browser):
     subscriber = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0,
                                                      'image_transport': 'h264'})
     url = subscriber.wait_for_output(URL_LINE).group(1)
@@ -77,7 +76,7 @@ def test_the_page_decodes_the_cameras_h264_and_the_node_decodes_nothing(
 
 
 def test_a_page_opened_before_the_camera_sends_turns_to_its_h264_when_it_comes(
-        launch, peer, browser):  # noqa: F811 (the fixture)
+        launch, peer, browser):
     subscriber = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0,
                                                      'image_transport': 'h264'})
     url = subscriber.wait_for_output(URL_LINE).group(1)

@@ -16,65 +16,18 @@
 The browser viewer in a real browser: headless Chromium watching the installed nodes.
 
 Needs Playwright (pip install playwright: it has no rosdep key) and Debian's `chromium` package
-(or CHROMIUM=/path/to/chromium). Without either, the test is skipped with the reason on a
-developer's PC or in `colcon test`, and fails when CI=true: CI must run it.
+(or CHROMIUM=/path/to/chromium): the `browser` fixture (conftest.py) skips the test with the
+reason without either on a developer's PC or in `colcon test`, and fails it when CI=true.
 """
 
 import base64
-import os
-import shutil
 
 import cv2
 import numpy as np
 from py_vision.capture.synthetic_picture import read_frame_index
-import pytest
 from ros_harness import wait_until
 
-try:
-    from playwright.sync_api import sync_playwright
-except ImportError:
-    sync_playwright = None
-
-CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic',
-                 '--no-first-run', '--disable-background-networking',
-                 '--disable-component-update', '--disable-sync']
 URL_LINE = r'viewer at (http://[^\s/]+:\d+/)'
-
-
-def missing_browser():
-    """Return what this machine lacks to run the test (None when it has everything)."""
-    if sync_playwright is None:
-        return 'Playwright is not installed (pip install playwright)'
-    if chromium_path() is None:
-        return 'Chromium is not installed (apt-get install chromium)'
-    return None
-
-
-def chromium_path():
-    """Return the Chromium executable, or None when there is none."""
-    explicit = os.environ.get('CHROMIUM')
-    if explicit:
-        return explicit
-    return shutil.which('chromium') or shutil.which('chromium-browser')
-
-
-@pytest.fixture
-def browser(tmp_path):
-    """Yield a fresh headless Chromium context (with its own profile directory)."""
-    missing = missing_browser()
-    if missing:
-        if os.environ.get('CI', '').lower() in ('1', 'true', 'yes'):
-            pytest.fail('%s, and CI requires the browser test' % missing)
-        pytest.skip('%s; CI runs this test' % missing)
-    path = chromium_path()
-    with sync_playwright() as playwright:
-        context = playwright.chromium.launch_persistent_context(
-            str(tmp_path / 'profile'), executable_path=path, headless=True, args=CHROMIUM_ARGS,
-            viewport={'width': 1280, 'height': 800}, device_scale_factor=1)
-        try:
-            yield context
-        finally:
-            context.close()
 
 
 def shown_frame(page):

@@ -22,7 +22,7 @@ file, and every control with its range, menu and value. A device that cannot be 
 error line and status 1.
 """
 
-from listing_text import control_line, offered
+from listing_text import control_line, formats, offered
 import pytest
 
 
@@ -33,7 +33,7 @@ def list_formats(launch, env, device, extra=()):
     return status, node.output()
 
 
-@pytest.mark.parametrize('model', ['webcam_1080p', 'vga_yuyv'])
+@pytest.mark.parametrize('model', ['webcam_1080p', 'vga_yuyv', 'synthetic'])
 def test_every_format_size_and_rate_the_camera_offers_is_listed(
         launch, emulated_camera, ros_env, model):
     camera = emulated_camera(model=model)
@@ -67,6 +67,23 @@ def test_the_synthetic_camera_lists_its_formats_and_controls(launch, ros_env):
     assert 'auto_exposure (0x009a0901): menu 1=Manual Mode; 3=Aperture Priority Mode' in out
 
 
+def test_the_synthetic_camera_and_the_emulated_one_from_its_file_list_the_same(
+        launch, emulated_camera, ros_env):
+    # One description of a camera: what the synthetic camera offers is what the emulator
+    # serves from the same data file, formats, sizes, rates and controls alike.
+    camera = emulated_camera(model='synthetic')
+    status, emulated = list_formats(launch, camera.env(ros_env), camera.by_id)
+    assert status == 0, emulated
+    status, synthetic = list_formats(launch, ros_env, 'synthetic')
+    assert status == 0, synthetic
+    assert offered(emulated) == offered(synthetic)
+    assert formats(emulated) == formats(synthetic)
+
+    def controls(out):
+        return out[out.index('controls'):].splitlines()[1:]
+    assert controls(emulated) == controls(synthetic)
+
+
 def test_the_device_comes_from_a_params_file(launch, emulated_camera, ros_env, tmp_path):
     camera = emulated_camera(model='vga_yuyv')
     params = tmp_path / 'params.yaml'
@@ -81,16 +98,18 @@ def test_the_device_comes_from_a_params_file(launch, emulated_camera, ros_env, t
 
 @pytest.mark.parametrize('content', ['- a list, not a mapping\n', 'usbcam_publisher: 5\n',
                                      'usbcam_publisher:\n  ros__parameters: [1, 2]\n'])
-def test_a_params_file_of_another_shape_does_not_hide_the_device(
+def test_a_params_file_the_node_could_not_read_is_one_line_and_status_2(
         launch, ros_env, tmp_path, content):
-    # A YAML file that is not a mapping of node: {ros__parameters: {...}} names no device: the
-    # listing comes from the device given with -p, never a traceback.
+    # A YAML file that is not a mapping of node: {ros__parameters: {...}}: rcl refuses it, and
+    # so does the listing, which reads the command line as the node does (ros_arguments):
+    # one line naming the file, the status of malformed arguments, never a traceback.
     params = tmp_path / 'params.yaml'
     params.write_text(content)
     status, out = list_formats(launch, ros_env, 'synthetic',
                                ['--ros-args', '--params-file', str(params)])
-    assert status == 0 and 'Traceback' not in out, out
-    assert 'YUYV' in offered(out)
+    assert status == 2 and 'Traceback' not in out, out
+    assert out.strip().count('\n') == 0 and str(params) in out, out
+    assert out.startswith('usbcam_publisher: invalid command line arguments: '), out
 
 
 def test_a_device_that_cannot_be_opened_is_one_line_and_status_1(

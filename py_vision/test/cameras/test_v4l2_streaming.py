@@ -24,6 +24,7 @@ keeps the device (another program gets EBUSY), activate resumes at once. The cam
 docs/emulated_cameras.md's; what the library served is read back from the test.
 """
 
+import errno
 import json
 import os
 import subprocess
@@ -271,3 +272,15 @@ def test_deactivate_stops_the_stream_and_keeps_the_device(
     # Released at cleanup: now another program may have it.
     wait_until(lambda: another_program_asks_for_it(camera) == 'granted', 20,
                what='the camera free after cleanup')
+
+
+def test_a_stream_that_does_not_start_is_one_error_line_and_status_1(
+        launch, emulated_camera, ros_env):
+    camera = emulated_camera(model='vga_yuyv', streamon_errno=errno.ENOSPC)
+    node = start(launch, camera, ros_env)
+    assert node.wait_exit(30) == 1
+    # The camera opened ('opened ...'); the stream's start is the one error, with the reason.
+    errors = [line for line in node.output().splitlines() if 'ERROR' in line]
+    assert len(errors) == 1 and 'Traceback' not in node.output(), node.output()
+    assert 'cannot stream from video_device "%s": streaming does not start (VIDIOC_STREAMON: ' \
+        '%s)' % (camera.device, os.strerror(errno.ENOSPC)) in errors[0]

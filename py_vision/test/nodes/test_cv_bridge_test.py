@@ -27,7 +27,6 @@ import pytest
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_harness import wait_until
 from sensor_msgs.msg import Image
-from test_web_browser import browser  # noqa: F401 (the headless Chromium fixture)
 
 RED = (0, 0, 255)  # BGR
 
@@ -290,7 +289,7 @@ def test_ctrl_c_during_a_long_processing_step_ends_cleanly(launch, peer):
     assert 'Traceback' not in node.output(), node.output()
 
 
-def test_the_browser_page_shows_what_was_processed_and_skipped(launch, browser):  # noqa: F811
+def test_the_browser_page_shows_what_was_processed_and_skipped(launch, browser):
     node = launch('cv_bridge_test', params={
         'simulated_work_ms': 300, 'display': 'web', 'web_port': 0})
     url = node.wait_for_output(r'viewer at (http://\S+:\d+/)').group(1)

@@ -99,20 +99,32 @@ def test_segment_holds_the_frames_a_node_publishes_and_no_more():
 
 def test_frame_size_from_a_parameter_file(tmp_path):
     params = tmp_path / 'params.yaml'
-    params.write_text('usbcam_publisher:\n  ros__parameters:\n    image_width: 1280\n'
+    params.write_text('/**:\n  ros__parameters:\n    image_height: 960\n'
+                      'usbcam_publisher:\n  ros__parameters:\n    image_width: 1280\n'
                       '    image_height: 720\n'
-                      '/**:\n  ros__parameters:\n    image_height: 960\n'
                       'other_node:\n  ros__parameters:\n    image_width: 4000\n')
     args = ['--ros-args', '--params-file', str(params)]
-    assert dds.requested_size(args, 'usbcam_publisher') == (1280, 720)
-    assert dds.requested_size(args, 'cv_bridge_test') == (640, 960)
-    # A node that republishes the camera's frames reads the camera's entry in a shared file,
-    # as pipeline.launch.py gives params.yaml to every node.
+    assert dds.requested_size(args, '/usbcam_publisher') == (1280, 720)
+    assert dds.requested_size(args, '/cv_bridge_test') == (640, 960)
+    # A node that republishes the camera's frames reads what its command line gives the
+    # camera, as pipeline.launch.py gives params.yaml to every node.
     assert dds.segment_size(dds.INPUT_SIZE, args, 'cv_bridge_test') == \
         dds.segment_size(dds.OWN_SIZE, args, 'usbcam_publisher')
-    # The command line wins over the file, as in rcl.
-    assert dds.requested_size(args + ['-p', 'image_width:=320'], 'usbcam_publisher') == (
+    # The command line's order (ros_arguments): a -p after the file wins ...
+    assert dds.requested_size(args + ['-p', 'image_width:=320'], '/usbcam_publisher') == (
         320, 720)
+    # ... and a /** section after the node's.
+    reordered = tmp_path / 'reordered.yaml'
+    reordered.write_text('usbcam_publisher:\n  ros__parameters:\n    image_width: 1280\n'
+                         '    image_height: 720\n'
+                         '/**:\n  ros__parameters:\n    image_height: 960\n')
+    assert dds.requested_size(['--ros-args', '--params-file', str(reordered)],
+                              '/usbcam_publisher') == (1280, 960)
+    # A renamed node reads its new name's section.
+    assert dds.segment_size(dds.OWN_SIZE, args + ['-r', '__node:=other_node'],
+                            'usbcam_publisher') == dds.segment_size(
+        dds.OWN_SIZE, ['--ros-args', '-p', 'image_width:=4000', '-p', 'image_height:=960'],
+        'usbcam_publisher')
 
 
 def test_unreadable_sizes_assume_large_frames(tmp_path):
@@ -122,7 +134,7 @@ def test_unreadable_sizes_assume_large_frames(tmp_path):
                  ['--ros-args', '--params-file', str(tmp_path / 'missing.yaml')],
                  ['--ros-args', '-p', 'image_width:=wide'],
                  ['--ros-args', '-p', 'image_width:=0']):
-        assert dds.requested_size(args, 'usbcam_publisher') == dds.SAFE_SIZE, args
+        assert dds.requested_size(args, '/usbcam_publisher') == dds.SAFE_SIZE, args
 
 
 def test_localhost_settings_restrict_udp_to_loopback(tmp_path, monkeypatch):

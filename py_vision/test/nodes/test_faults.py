@@ -295,7 +295,7 @@ def test_two_hosts_over_a_veth_pair(ros_env, domain_id, tmp_path):
         # Fast DDS picks its interfaces at start-up: the veth must be up before the nodes are.
         for ns, dev in zip(hosts, veth):
             wait_until(lambda: link_up(ns, dev), 10, what='%s up in %s' % (dev, ns))
-        env = dict(ros_env, ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET')
+        env = ros_harness.with_discovery(dict(ros_env), 'subnet')
 
         def in_host(ns, cmd, log):
             # A private /dev/shm per host, so Fast DDS cannot take a shared-memory shortcut.

@@ -21,6 +21,7 @@ import tempfile
 import threading
 
 from hypothesis import given, settings, strategies as st
+import numpy as np
 from py_vision import calibration
 from py_vision.calibration import (CalibrationError, CameraInfoManager, dump_calibration,
                                    load_calibration, resolve_url, validate_camera_info)
@@ -101,10 +102,12 @@ def write(path, text):
 
 def make_info(fx=600.0, width=640, height=480, model='plumb_bob', d=(0.1, -0.2, 0.0, 0.0, 0.0)):
     info = CameraInfo(width=width, height=height, distortion_model=model)
-    info.k = [fx, 0.0, width / 2, 0.0, fx, height / 2, 0.0, 0.0, 1.0]
+    # Arrays, as a received message holds them: Humble's message refuses a list with a NaN (one
+    # from the wire gets through all the same).
+    info.k = np.array([fx, 0.0, width / 2, 0.0, fx, height / 2, 0.0, 0.0, 1.0])
     info.d = list(d)
     info.r = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
-    info.p = [fx, 0.0, width / 2, 0.0, 0.0, fx, height / 2, 0.0, 0.0, 0.0, 1.0, 0.0]
+    info.p = np.array([fx, 0.0, width / 2, 0.0, 0.0, fx, height / 2, 0.0, 0.0, 0.0, 1.0, 0.0])
     return info
 
 

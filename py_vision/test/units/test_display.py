@@ -59,3 +59,22 @@ def test_a_reachable_display_with_headless_opencv_says_so(monkeypatch, x_listene
     monkeypatch.delenv('WAYLAND_DISPLAY', raising=False)
     monkeypatch.setenv('DISPLAY', '127.0.0.1:%d' % x_listener)
     assert 'no GUI support' in display.window_unavailable_reason()
+
+
+def test_a_gui_opencv_that_cannot_open_a_window_says_why(monkeypatch, x_listener):
+    # The boards' OpenCV 4.6.0 has GTK3: a display GTK cannot open is not a headless OpenCV.
+    monkeypatch.delenv('WAYLAND_DISPLAY', raising=False)
+    monkeypatch.setenv('DISPLAY', '127.0.0.1:%d' % x_listener)
+    gtk3 = 'General configuration for OpenCV 4.6.0\n  GUI:                           GTK3\n' \
+           '    GTK+:                        YES (ver 3.24.38)\n'
+
+    def gtk_cannot_start(title, flags):
+        raise display.cv2.error(
+            'OpenCV(4.6.0) ./modules/highgui/src/window_gtk.cpp:635: error: (-2:Unspecified '
+            "error) Can't initialize GTK backend in function 'cvInitSystem'\n")
+    monkeypatch.setattr(display.cv2, 'getBuildInformation', lambda: gtk3)
+    monkeypatch.setattr(display.cv2, 'namedWindow', gtk_cannot_start)
+    reason = display.window_unavailable_reason()
+    assert reason == "OpenCV's GTK3 GUI cannot open a window on DISPLAY=127.0.0.1:%d: Can't " \
+        'initialize GTK backend' % x_listener
+    assert 'headless' not in reason

@@ -108,12 +108,11 @@ def test_the_streaming_structures_are_videodev2s_on_64_bit():
             v4l2_stream.VIDIOC_STREAMOFF, v4l2_stream.VIDIOC_S_PARM) == (
         0xC0D05605, 0xC0585609, 0xC058560F, 0xC0585611, 0x40045612, 0x40045613, 0xC0CC5616)
     # index type bytesused flags field, pad, timeval, timecode, sequence memory, m, length...
-    fields = v4l2_stream._BUFFER.unpack(struct.pack(
-        '=5I4xqq16x2I8xI12x', 3, 1, 1234, 0x2000, 1, 17, 250000, 42, 1, 4096))
-    assert [fields[i] for i in (v4l2_stream._INDEX, v4l2_stream._BYTESUSED,
-                                v4l2_stream._FLAGS, v4l2_stream._SEC, v4l2_stream._USEC,
-                                v4l2_stream._SEQUENCE, v4l2_stream._LENGTH)] == [
-        3, 1234, 0x2000, 17, 250000, 42, 4096]
+    raw = struct.pack('=5I4xqq16x2IQI12x', 3, 1, 1234, 0x2000, 1, 17, 250000, 42, 1,
+                      0x8000, 4096)
+    assert v4l2_stream._DEQUEUED.unpack_from(raw) == (3, 1234, 0x2000, 17, 250000, 42)
+    fields = v4l2_stream._BUFFER.unpack(raw)
+    assert (fields[v4l2_stream._OFFSET], fields[v4l2_stream._LENGTH]) == (0x8000, 4096)
     assert v4l2_stream._MEMORY_AT == 60
 
 

@@ -173,6 +173,7 @@ struct camera {
     int corrupt_mode;                      /* 0 truncate, 1 garbage, 2 no EOI, 3 cycle */
     uint32_t drop_every;                   /* every n-th frame lost on the way (no buffer) */
     uint32_t error_every;                  /* every n-th buffer flagged V4L2_BUF_FLAG_ERROR */
+    int streamon_errno;                    /* what VIDIOC_STREAMON fails with (0: it works) */
     struct shared_state *state;
     struct served_record *served;          /* SERVED_SLOTS, or NULL: no served file */
     /* JPEG */
@@ -372,6 +373,8 @@ static void load_camera(const char *dir)
             cam->drop_every = (uint32_t)strtoul(rest, NULL, 10);
         } else if (!strcmp(line, "error_every")) {
             cam->error_every = (uint32_t)strtoul(rest, NULL, 10);
+        } else if (!strcmp(line, "streamon_errno")) {
+            cam->streamon_errno = (int)strtol(rest, NULL, 10);
         } else if (!strcmp(line, "planes") && fmt) {
             int n = 0, used = 0;
             struct plane_desc *pl = fmt->planes;
@@ -2249,6 +2252,8 @@ static int do_ioctl(struct handle *h, unsigned int cmd, void *arg)
     case VIDIOC_STREAMON: {
         if (*(int *)arg != V4L2_BUF_TYPE_VIDEO_CAPTURE || !h->n_buffers)
             return EINVAL;
+        if (cam->streamon_errno)
+            return cam->streamon_errno;
         int err = acquire(h);
         if (err)
             return err;
