@@ -22,7 +22,7 @@ from emulated_camera import CompilerMissing, EmulatedCamera
 from hypothesis import settings
 import pytest
 import ros_harness
-from vivid_vm import SessionVm, VmUnavailable
+from vivid_vm import SessionVm
 
 # A property test that fails prints the @reproduce_failure line that replays its example: the
 # falsifying example alone may not (a numpy array's repr rounds). On top of the current
@@ -48,7 +48,7 @@ os.environ['ROS_LOG_DIR'] = _SESSION_ROS_LOG_DIR
 # (scripts/test.sh) has no Playwright, and leaves the vivid VM's tests to the main run (the
 # kernel's answers do not depend on the Python side's versions). Left out, not skipped:
 # nothing claims they ran.
-LEFT_OUT_BY = {'PY_VISION_BROWSER': 'browser', 'PY_VISION_VIVID': 'vivid'}
+LEFT_OUT_BY = {'PY_VISION_BROWSER': 'browser', 'PY_VISION_VIVID': 'vivid_session'}
 
 
 def pytest_collection_modifyitems(config, items):
@@ -175,12 +175,7 @@ def vivid(vivid_session):
     what it returned (docs/vivid.md). Where no VM can start (vivid_vm.missing()) the test is
     skipped with the reason, and fails in CI.
     """
-    try:
-        return vivid_session.get()
-    except VmUnavailable as error:
-        if os.environ.get('CI') == 'true':
-            pytest.fail(str(error))
-        pytest.skip(str(error))
+    return vivid_session.vm_or_skip()
 
 
 # The browser tests' Chromium: headless, no first-run work, nothing fetched from the network.

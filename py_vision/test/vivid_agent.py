@@ -260,10 +260,12 @@ class Vm:
         return self.device
 
     def open_by(self, pid):
-        """Whether process pid has the device open (its /proc/<pid>/fd)."""
+        """Return whether process pid has the device open, unplugged or not (/proc/pid/fd)."""
         fds = Path('/proc', str(pid), 'fd')
         with contextlib.suppress(OSError):
-            return any(os.readlink(fd) == self.device for fd in fds.iterdir())
+            # An unplugged device's node is gone: its handles read '/dev/video0 (deleted)'.
+            return any(os.readlink(fd).split(' (deleted)')[0] == self.device
+                       for fd in fds.iterdir())
         return False
 
     def dmesg(self, lines=20):

@@ -45,6 +45,7 @@ import sys
 import tempfile
 import time
 
+import pytest
 import ros_harness
 
 HERE = Path(__file__).resolve().parent
@@ -302,6 +303,15 @@ class SessionVm:
                 self.error = error
                 raise
         return self.vm
+
+    def vm_or_skip(self):
+        """Return the running VM; where none can start, skip the test (fail it in CI)."""
+        try:
+            return self.get()
+        except VmUnavailable as error:
+            if os.environ.get('CI') == 'true':
+                pytest.fail(str(error))
+            pytest.skip(str(error))
 
     def close(self):
         if self.vm is not None:

@@ -20,15 +20,18 @@ Real kernel V4L2 semantics, where the emulated cameras give uvcvideo's as emulat
 formats, sizes and controls listed; its YUYV test pattern published with the right colours;
 controls given on the command line reaching the device, and vivid's controls as parameters
 with its ranges and menus; its injected faults (a fatal streaming error, a buffer flagged as
-an error, a failing STREAMON) and an unplug (the driver unbound and bound again) survived;
-a managed node deactivated and activated. Each test sends a function to the VM
+an error, a failing STREAMON) survived; a managed node deactivated, keeping the device, and
+activated. Each test sends a function to the VM
 (`vivid.run`, docs/vivid.md), which runs the installed nodes there on vivid's device and
 returns what they did; the assertions are made here.
 """
 
+import errno
 import os
 import re
 
+from lifecycle_client import Lifecycle
+from lifecycle_msgs.msg import Transition
 from listing_text import control_line, formats
 import numpy as np
 from param_client import describe_parameters, get_parameters, list_parameters, set_parameter
@@ -229,6 +232,69 @@ def test_vivids_controls_are_parameters_with_its_ranges_and_menus(vivid):
             assert '%d=%s' % (index, entry) in description, (name, description)
 
 
+# Faults, in the VM: each pressed on the running node, which must get over it.
+
+def recovering(vm, node, frames, fault, sign):
+    """Inject fault; wait for the node to log sign once more, then for frames to flow again."""
+    start = len(node.output())
+    seen = node.output().count(sign)
+    before = len(frames)
+    fault()
+    try:
+        wait_until(lambda: node.output().count(sign) > seen or node.proc.poll() is not None,
+                   120, what='%r once more in the log' % sign)
+    except AssertionError as error:
+        node.fail(str(error))
+    after = len(frames)
+    wait_until(lambda: len(frames) >= after + 5, 120, what='frames after %s' % sign)
+    return {'log': node.output()[start:], 'frames_before': before,
+            'frames_after': len(frames) - after, 'running': node.proc.poll() is None}
+
+
+def injected_faults(vm):
+    frames = vm.peer.collect(Image, 'usb_camera/image')
+    node = vm.launch(NODE, params=dict(STREAM, video_device=vm.device))
+    wait_until(lambda: len(frames) >= 5, 120, what='5 frames')
+    return {
+        'flagged': recovering(vm, node, frames,
+                              lambda: vm.set_control('inject_v4l2_buf_flag_error'),
+                              'flagged as an error'),
+        'fatal': recovering(vm, node, frames,
+                            lambda: vm.set_control('inject_fatal_streaming_error'),
+                            'is back after'),
+        'streamon': recovering(vm, node, frames, lambda: (
+            vm.set_control('inject_vidioc_streamon_error'),
+            vm.set_control('inject_fatal_streaming_error')), 'is back after'),
+        'output': node.output()}
+
+
+def deactivated(vm):
+    """Activate, deactivate, activate a managed node: its frames, and who has the device."""
+    frames = vm.peer.collect(Image, 'usb_camera/image')
+    node = vm.launch(NODE, params=dict(STREAM, video_device=vm.device, managed=True))
+    lifecycle = Lifecycle(vm.peer)
+    got = {'configured': lifecycle.set(Transition.TRANSITION_CONFIGURE),
+           'activated': lifecycle.set(Transition.TRANSITION_ACTIVATE)}
+    wait_until(lambda: len(frames) >= 5, 120, what='frames while active')
+    got['deactivated'] = lifecycle.set(Transition.TRANSITION_DEACTIVATE)
+    node.wait_for_output('deactivated: streaming stopped after', 60)
+    count = len(frames)
+    # Another program asking for a format while the node keeps the device: the kernel says.
+    fd = v4l2_ioctl.open_device(vm.device)
+    try:
+        v4l2_ioctl.set_format(fd, 'YUYV', 320, 180)
+        got['other_program'] = 'granted'
+    except OSError as error:
+        got['other_program'] = errno.errorcode[error.errno]
+    finally:
+        os.close(fd)
+    got['kept'] = vm.open_by(node.proc.pid)
+    got['reactivated'] = lifecycle.set(Transition.TRANSITION_ACTIVATE)
+    wait_until(lambda: len(frames) >= count + 5, 120, what='frames after activating again')
+    got['output'] = node.output()
+    return got
+
+
 # Parameter changes on vivid, in the VM: the refusal of a control auto gain holds, a 64-bit
 # value, a button pressed, and every control of the device with what it is.
 WIDE = -(2 ** 50) - 7
@@ -259,6 +325,42 @@ def change_controls(vm):
     got['parameters'] = list_parameters(vm.peer, NODE)
     got['output'] = node.output()
     return got
+
+
+@pytest.fixture(scope='module')
+def faults(vivid_session):
+    """Inject the faults once, on one node, for the tests that read what it did."""
+    return vivid_session.vm_or_skip().run(injected_faults)
+
+
+def test_a_buffer_flagged_as_an_error_is_dropped_and_said(faults):
+    got = faults['flagged']
+    assert 'delivered a frame flagged as an error (1 so far); dropped, never published' in \
+        got['log'], faults['output']
+    assert 'lost' not in got['log'], faults['output']   # one bad buffer is no reason to reopen
+    assert got['running'] and got['frames_after'] >= 5
+
+
+def test_a_fatal_streaming_error_is_survived(faults):
+    got = faults['fatal']
+    assert re.search(r'lost /dev/video\d+ after \d+ failed reads; releasing it and reopening'
+                     r'.*is back after 1 attempt', got['log'], re.S), faults['output']
+    assert got['running'] and got['frames_after'] >= 5
+
+
+def test_a_streamon_that_fails_is_tried_again(faults):
+    got = faults['streamon']
+    assert re.search(r'reopen attempt 1 failed: .*VIDIOC_STREAMON: Invalid argument.*'
+                     r'is back after 2 attempt', got['log'], re.S), faults['output']
+    assert got['running'] and got['frames_after'] >= 5
+
+
+def test_deactivate_stops_streaming_and_keeps_the_device(vivid):
+    got = vivid.run(deactivated)
+    assert got['configured'] and got['activated'] and got['deactivated'], got['output']
+    assert got['kept'] and got['other_program'] == 'EBUSY', got
+    assert got['reactivated'], got['output']
+    assert got['output'].count('opened /dev/video') == 1, got['output']  # never reopened
 
 
 def kind_of(control):
