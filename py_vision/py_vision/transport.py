@@ -56,6 +56,7 @@ MAX_IMAGE = Spec('max_image_mb', 100.0, 'largest image taken, in MB (1e6 bytes) 
 JPEG_FORMAT = 'bgr8; jpeg compressed bgr8'
 MONO_JPEG_FORMAT = 'mono8; jpeg compressed mono8'
 _SOF_MARKERS = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}
+_NO_PIXELS = np.empty(0, np.uint8)   # what a kept message holds between frames
 
 
 def compressed_topic(node, base_topic: str) -> str:
@@ -116,7 +117,7 @@ class ImagePublisher:
         Return an Image of pixels holding their bytes themselves, not a copy.
 
         It is published at once: rclpy copies the bytes (a camera's own buffer, with native)
-        into the middleware's message then.
+        into the middleware's message then, and the message lets them go.
         """
         layout = (pixels.shape, pixels.dtype.str, encoding)
         if layout != self._raw_layout:
@@ -153,7 +154,12 @@ class ImagePublisher:
                 return False, False  # not a whole image (a JPEG that does not decode): no part
             msg = self._raw_message(pixels, encoding)
             msg.header = header
-            self.raw.publish(msg)
+            try:
+                self.raw.publish(msg)
+            finally:
+                # The message is kept for the next frame, its bytes not: they may be the
+                # camera's buffer, which must be unmapped when the camera is released.
+                share_message_data(msg, _NO_PIXELS)
             raw_done = True
         if self.wants_compressed():
             what = JPEG_FORMAT

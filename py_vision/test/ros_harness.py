@@ -250,8 +250,10 @@ class NodeProcess:
 
     def __init__(self, executable, args, env, name=None, log_dir=None, spawn=None):
         """
-        Start it; `spawn(cmd, env, log_fd, log_path)`, when given, starts it instead of
-        subprocess.Popen and returns what stands for the Popen (poll, wait, send_signal, pid).
+        Start it.
+
+        `spawn(cmd, env, log_fd, log_path)`, when given, starts it instead of subprocess.Popen
+        and returns what stands for the Popen (poll, wait, send_signal, pid).
         """
         self.name = name or executable
         if log_dir is None:

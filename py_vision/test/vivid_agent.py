@@ -260,13 +260,27 @@ class Vm:
         return self.device
 
     def open_by(self, pid):
-        """Return whether process pid has the device open, unplugged or not (/proc/pid/fd)."""
-        fds = Path('/proc', str(pid), 'fd')
+        """Return whether process pid has a handle of the device, unplugged or not."""
+        return any(held.startswith('fd ') for held in self.held_by(pid))
+
+    def held_by(self, pid):
+        """
+        Return what of the device process pid holds: its handles and its mappings of it.
+
+        An unplugged device's node is gone: a handle or mapping of it reads
+        '/dev/videoN (deleted)'.
+        """
+        held = []
         with contextlib.suppress(OSError):
-            # An unplugged device's node is gone: its handles read '/dev/video0 (deleted)'.
-            return any(os.readlink(fd).split(' (deleted)')[0] == self.device
-                       for fd in fds.iterdir())
-        return False
+            for fd in Path('/proc', str(pid), 'fd').iterdir():
+                with contextlib.suppress(OSError):
+                    target = os.readlink(fd)
+                    if target.split(' (deleted)')[0] == self.device:
+                        held.append('fd %s -> %s' % (fd.name, target))
+            for line in Path('/proc', str(pid), 'maps').read_text().splitlines():
+                if line.split(' (deleted)')[0].endswith(' ' + self.device):
+                    held.append('mapped: ' + line)
+        return held
 
     def dmesg(self, lines=20):
         """Return the kernel log's last lines (vivid logs there what it was made to do)."""

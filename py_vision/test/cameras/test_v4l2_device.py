@@ -26,6 +26,7 @@ docs/emulated_cameras.md's; the faults are injected from here.
 
 import json
 import os
+from pathlib import Path
 import re
 import subprocess
 import sys
@@ -109,8 +110,10 @@ def test_a_camera_plugged_back_elsewhere_is_found_by_id_with_its_controls(
         launch, peer, emulated_camera, ros_env):
     camera = emulated_camera()
     frames = peer.collect(Image, 'usb_camera/image')
+    # native: each image published is the camera's own buffer, which the node must let go.
     node = start(launch, camera, ros_env, video_device=camera.by_id, framerate=30.0,
-                 brightness=200, auto_white_balance=False, white_balance=3000)
+                 brightness=200, auto_white_balance=False, white_balance=3000,
+                 output_encoding='native')
     # The node streams only once the controls it was given are set on the camera ('opened'
     # is logged before that), so its first frame is the moment to read them.
     wait_until(lambda: frames, 30, what='frames')
@@ -118,6 +121,11 @@ def test_a_camera_plugged_back_elsewhere_is_found_by_id_with_its_controls(
             camera.control('white_balance_temperature')) == (200, 0, 3000)
     camera.unplug()
     node.wait_for_output('lost %s' % camera.by_id, 30)
+    # Released: none of its buffers stays mapped (a kernel driver frees the device's number
+    # only then, and a camera plugged back comes back under it).
+    maps = Path('/proc', str(node.pid), 'maps')
+    wait_until(lambda: 'memfd:uvc-emulator' not in maps.read_text(), 10,
+               what="the unplugged camera's buffers unmapped")
     camera.replug(node=camera.node + 2)   # another /dev/video node; by-id follows
     assert camera.control('brightness') == camera.control_info('brightness')['default']
     node.wait_for_output('is back after', 30)

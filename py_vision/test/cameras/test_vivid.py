@@ -268,6 +268,29 @@ def injected_faults(vm):
         'output': node.output()}
 
 
+def unplugged(vm):
+    """Stream with a control given, unbind the driver, bind it again; what the node did."""
+    frames = vm.peer.collect(Image, 'usb_camera/image')
+    node = vm.launch(NODE, params=dict(STREAM, video_device=vm.device, brightness=200))
+    wait_until(lambda: len(frames) >= 5, 120, what='5 frames')
+    vm.unplug()
+    node.wait_for_output('lost %s' % vm.device, 120)
+    gone = not os.path.exists(vm.device)
+    # Released means no handle and no mapping left: the kernel frees the device's number
+    # only then, and gives it to the device when it comes back.
+    try:
+        wait_until(lambda: not vm.held_by(node.proc.pid), 30, what='the device released')
+        held = []
+    except AssertionError:
+        held = vm.held_by(node.proc.pid)
+    vm.plug()  # back with every control at its default
+    got = {'gone': gone, 'held': held, 'device': vm.device, 'output': node.output()}
+    if not held:
+        got.update(recovering(vm, node, frames, lambda: None, 'is back after'),
+                   brightness=vm.control('brightness'), output=node.output())
+    return got
+
+
 def deactivated(vm):
     """Activate, deactivate, activate a managed node: its frames, and who has the device."""
     frames = vm.peer.collect(Image, 'usb_camera/image')
@@ -353,6 +376,16 @@ def test_a_streamon_that_fails_is_tried_again(faults):
     assert re.search(r'reopen attempt 1 failed: .*VIDIOC_STREAMON: Invalid argument.*'
                      r'is back after 2 attempt', got['log'], re.S), faults['output']
     assert got['running'] and got['frames_after'] >= 5
+
+
+def test_an_unplug_is_survived_and_the_controls_set_again(vivid):
+    got = vivid.run(unplugged)
+    assert got['gone'], 'the device node stayed after the driver was unbound'
+    assert not got['held'], 'the node said it released %s but still holds it:\n%s\n%s' % (
+        got['device'], '\n'.join(got['held']), got['output'])
+    assert got['device'] == '/dev/video0', got   # its number, free again, given back to it
+    assert got['running'] and got['frames_after'] >= 5, got['output']
+    assert got['brightness'] == 200, got['output']  # the device came back at its default, 128
 
 
 def test_deactivate_stops_streaming_and_keeps_the_device(vivid):
