@@ -28,7 +28,9 @@ emulated webcam, docs/emulated_cameras.md), each run in a process of its own:
 - py_vision: `CaptureLoop` over `Camera.open`, as usbcam_publisher runs it (its own mmap
   streaming, the buffers' timestamps, the stale, corrupt, error and dropped frame checks,
   loss detection, counters), handing each frame to a function that takes what is measured:
-  its BGR image (``Frame.image('bgr8')``), its JPEG as the camera sent it (``Frame.jpeg``), or
+  its BGR image (``Frame.image('bgr8')``), its pixels as sent (``Frame.image('native')``: the
+  image the node publishes with output_encoding native), its JPEG as the camera sent it
+  (``Frame.jpeg``), or
   the frame published as usbcam_publisher publishes it (`ImagePublisher`: the Image holding the
   frame's bytes, rclpy copying them into the middleware's message; nobody subscribed, so
   nothing crosses a process), as bgr8 and as native (the camera's YUYV, yuv422_yuy2).
@@ -58,6 +60,7 @@ import ros_harness
 SIZES = [(640, 480, 'YUYV', 30.0), (1280, 720, 'YUYV', 10.0), (1280, 720, 'MJPG', 30.0)]
 # What a case compares: (its name, the ways, in the order they run)
 COMPARE = {'YUYV': [('to BGR', ('bare', 'opencv', 'py_vision')),
+                    ('the image to publish', ('py_vision', 'py_vision native')),
                     ('published', ('bgr8 published', 'native published'))],
            'MJPG': [("the camera's JPEG kept", ('bare', 'opencv jpeg', 'py_vision jpeg'))]}
 WARMUP = 10
@@ -121,13 +124,13 @@ def main():
         if len(ms) == 3:
             print('| %s | %s | %g | %s | %.3f | %.3f | %.3f | %.2f |' % (
                 case['size'], case['format'], case['fps'], case['what'], *ms, case['ratio']))
-    print('\n| size | format | fps | bgr8 published | native published | native / bgr8 |')
-    print('|---|---|---:|---:|---:|---:|')
+    print('\n| size | format | fps | frames | bgr8 | native | native / bgr8 |')
+    print('|---|---|---:|---|---:|---:|---:|')
     for case in cases:
         ms = list(case['ms_per_frame'].values())
         if len(ms) == 2:
-            print('| %s | %s | %g | %.3f | %.3f | %.2f |' % (
-                case['size'], case['format'], case['fps'], *ms, case['ratio']))
+            print('| %s | %s | %g | %s | %.3f | %.3f | %.2f |' % (
+                case['size'], case['format'], case['fps'], case['what'], *ms, case['ratio']))
     save_results('capture', {'cases': cases, 'runs_each': runs})
 
 

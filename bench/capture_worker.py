@@ -81,6 +81,8 @@ else:
     def keep(frame):
         if way == 'py_vision':
             return frame.image('bgr8')
+        if way == 'py_vision native':
+            return frame.image('native')
         if way == 'py_vision jpeg':
             return frame.jpeg
         output = way.split()[0]

@@ -749,7 +749,7 @@ class WebViewer:
         result['clients'] = self.connections.streams
         result['encoded_frames'] = self.frames.encoded
         result['viewer_frames'] = self.frames.number + self.video.number
-        if self.video.number:
+        if self.video.number:   # a video's units came: its codec, '' until a keyframe's
             result['video_codec'] = self.video.codec
             result['video_decoder_missing'] = self.video_decoder_missing
         return _json_safe(result)

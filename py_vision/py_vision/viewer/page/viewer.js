@@ -149,12 +149,19 @@
         show("stat-age", num(s.age_ms_p50, 1, " ms"));
         show("stat-age-p99", num(s.age_ms_p99, 1, " ms"));
       }
-      if (chosenFor !== (s.video_codec || "")) { chooseMode(s); }
+      // A video's units come but no keyframe has told its codec yet (video_codec ""): wait
+      // for it. Choosing now would take the node's JPEG stream, which it decodes the video
+      // for, until the next answer.
+      const beforeKeyframe = s.video_codec === "";
+      if (!beforeKeyframe && chosenFor !== (s.video_codec || "")) { chooseMode(s); }
       if (s.viewer_frames > 0 && mode === "mjpeg" && s.video_codec && s.video_decoder_missing) {
         setStatus("live", "live");
         message("this browser cannot decode the camera\u2019s H.264 here (it needs WebCodecs " +
                 "in a secure context: open the viewer on localhost, e.g. through ssh -L), " +
                 "and the node cannot either: " + s.video_decoder_missing);
+      } else if (beforeKeyframe && mode === null) {
+        setStatus("waiting for frames", "");
+        message("waiting for the camera\u2019s next keyframe");
       } else if (s.viewer_frames > 0) {
         setStatus("live", "live");
         if (!retry) { message(""); }
