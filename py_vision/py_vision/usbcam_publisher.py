@@ -56,12 +56,12 @@ from py_vision.camera_video import CameraVideo
 from py_vision.capture import (
     Camera, CaptureLoop, pixel_format_accepted, SourceError, SyntheticDevices)
 from py_vision.capture.devices import AUTO
-from py_vision.capture.listing import device_listing, devices_listing
 from py_vision.capture.pixel_formats import find, names_accepted, OUTPUTS
 from py_vision.control_names import pixel_format_fourcc, USB_CAM_PIXEL_FORMATS
 from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
 from py_vision.diagnostics import Diagnostics
+from py_vision.listing import device_listing, devices_listing
 from py_vision.node_main import ConfigError, main_for
 from py_vision.params import Parameters, Spec
 from py_vision.qos import create_publisher, publisher_qos, RELIABILITY

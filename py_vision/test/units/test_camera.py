@@ -310,7 +310,7 @@ def test_something_that_is_not_a_v4l2_device_says_so(tmp_path):
 @pytest.mark.parametrize('device', ['\u00b2', ' 9\u2079 '])
 def test_a_device_of_digits_that_are_no_number_is_one_clear_error(device):
     # str.isdigit() holds for superscripts, which int() refuses: not a camera index, a name.
-    from py_vision.capture.listing import device_listing
+    from py_vision.listing import device_listing
     with pytest.raises(SourceError, match='cannot open video_device'):
         _Camera.open(device, 160, 120, 10.0)
     with pytest.raises(SourceError, match='cannot open video_device'):

@@ -20,7 +20,8 @@ Asks the device itself (V4L2 ioctls, or the synthetic camera's model, or the fil
 without streaming and without ROS: each pixel format with its frame sizes and rates and what
 py_vision makes of it (its sensor_msgs encoding as sent, from the pixel format table), then the
 controls with their ranges, menus and values. `devices_listing` is every /dev/videoN in one line
-each (devices.video_devices).
+each (devices.video_devices). It stands above the camera layer: it names controls by their
+parameter names (control_names), which the camera layer does not know.
 """
 
 from typing import List
