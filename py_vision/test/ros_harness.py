@@ -253,7 +253,7 @@ class NodeProcess:
         Start it.
 
         `spawn(cmd, env, log_fd, log_path)`, when given, starts it instead of subprocess.Popen
-        and returns what stands for the Popen (poll, wait, send_signal, pid).
+        and returns what stands for the Popen (poll, wait, send_signal, pid, returncode).
         """
         self.name = name or executable
         if log_dir is None:

@@ -44,14 +44,17 @@ class ClipPublisher:
 
     As sensor_msgs/CompressedImage with format h264 (what py_vision publishes where
     foxglove_msgs is not installed), stamped now, at `rate`; `sent` lists the index of each unit
-    published, in order. Independent of py_vision's own publisher.
+    published, in order; with when_subscribed, from the moment a subscriber has matched.
+    Independent of py_vision's own publisher.
     """
 
-    def __init__(self, peer, topic='usb_camera/image/h264', rate=30.0, first=0):
+    def __init__(self, peer, topic='usb_camera/image/h264', rate=30.0, first=0,
+                 when_subscribed=False):
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         self._node = peer.node
         self._units = access_units()
         self._next = first
+        self._when_subscribed = when_subscribed   # nothing sent before a subscriber matches
         self.sent = []
         self.publisher = self._node.create_publisher(
             self._message_type(), topic,
@@ -64,6 +67,8 @@ class ClipPublisher:
         return CompressedImage
 
     def _publish(self):
+        if self._when_subscribed and not self.publisher.get_subscription_count():
+            return
         msg = self._message_type()(format='h264')
         msg.header.stamp = self._node.get_clock().now().to_msg()
         msg.header.frame_id = 'clip'

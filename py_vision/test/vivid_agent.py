@@ -478,9 +478,12 @@ def run_call(request, vivid, device, sock, status_dir, answers):
         answer = {'value': function(vm, **request['kwargs'])}
     except BaseException:
         answer = {'error': failure_text(vm)}
-    finally:
-        if vm is not None:
+    if vm is not None:
+        try:
             vm.close()
+        except BaseException:   # said after the function's own failure, if it had one
+            answer = {'error': '%sstopping what the call started failed:\n%s' % (
+                answer['error'] + '\n' if 'error' in answer else '', traceback.format_exc())}
     try:
         data = pickle.dumps(answer)
     except Exception as error:

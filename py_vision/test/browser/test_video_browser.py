@@ -101,18 +101,18 @@ def test_a_page_opened_before_the_camera_sends_turns_to_its_h264_when_it_comes(
 def test_a_page_opened_before_the_first_keyframe_waits_for_it_and_the_node_decodes_nothing(
         launch, peer, browser):
     # A camera joined mid-stream: units come, but no keyframe yet (the clip's next is unit
-    # KEYINT, 7 s away at 2 a second), so nobody knows the codec yet.
+    # KEYINT, 14 s after the first at 1 a second), so nobody knows the codec yet.
     subscriber = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0,
                                                      'image_transport': 'h264'})
     url = subscriber.wait_for_output(URL_LINE).group(1)
-    clip = ClipPublisher(peer, rate=2.0, first=1)
+    clip = ClipPublisher(peer, rate=1.0, first=1, when_subscribed=True)
     wait_until(lambda: viewer_stats(url).get('video_codec') == '', 20.0, interval=0.1,
                what='units before any keyframe')
     page = browser.new_page()
     page.goto(url)
     wait_until(lambda: page.locator('#overlay').inner_text() ==
-               'waiting for the camera\u2019s next keyframe' or shown_index(page) is not None,
-               20.0, interval=0.1, what='the page to wait for the keyframe')
+               'waiting for the camera\u2019s next keyframe', 10.0, interval=0.1,
+               what='the page to say it waits for the keyframe')
     wait_until(lambda: shown_index(page) is not None, 30.0, interval=0.1,
                what='the first decoded picture on the canvas')
     assert clip.sent[0] == 1 and KEYINT in clip.sent

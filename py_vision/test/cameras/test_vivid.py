@@ -283,11 +283,14 @@ def unplugged(vm):
         held = []
     except AssertionError:
         held = vm.held_by(node.proc.pid)
-    vm.plug()  # back with every control at its default
-    got = {'gone': gone, 'held': held, 'device': vm.device, 'output': node.output()}
-    if not held:
-        got.update(recovering(vm, node, frames, lambda: None, 'is back after'),
-                   brightness=vm.control('brightness'), output=node.output())
+    got = {'gone': gone, 'held': held}
+    if held:
+        vm.plug()
+        got.update(device=vm.device, output=node.output())
+        return got
+    # Plugged back inside recovering(), which counts the node's 'is back after' lines first.
+    got.update(recovering(vm, node, frames, vm.plug, 'is back after'))   # back at its defaults
+    got.update(device=vm.device, brightness=vm.control('brightness'), output=node.output())
     return got
 
 
