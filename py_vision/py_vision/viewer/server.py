@@ -747,6 +747,8 @@ class WebViewer:
         with self._stats_lock:
             result = dict(self._stats)
         result['clients'] = self.connections.streams
+        with self._stats_lock:   # the MJPEG clients, for which the node encodes (and decodes)
+            result['mjpeg_clients'] = self._pixel_clients
         result['encoded_frames'] = self.frames.encoded
         result['viewer_frames'] = self.frames.number + self.video.number
         if self.video.number:   # a video's units came: its codec, '' until a keyframe's

@@ -88,7 +88,10 @@ def test_a_page_opened_before_the_camera_sends_turns_to_its_h264_when_it_comes(
     first = wait_until(lambda: shown_index(page) is not None and shown_index(page), 20.0,
                        interval=0.1, what='the first decoded picture on the canvas')
     assert page.locator('#video').is_hidden()
-    # Once the page decodes, the node does not: its JPEG count stops.
+    # Once the page decodes, the node does not: the page leaves the MJPEG stream it took
+    # while nothing came (the server sees it gone at its next write), and the JPEG count stops.
+    wait_until(lambda: viewer_stats(url)['mjpeg_clients'] == 0, 10.0, interval=0.1,
+               what='the page to leave the MJPEG stream')
     encoded = viewer_stats(url)['encoded_frames']
     wait_until(lambda: shown_index(page) not in (None, first), 10.0, interval=0.1,
                what='the canvas to show another frame of the clip')

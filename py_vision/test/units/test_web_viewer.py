@@ -195,7 +195,7 @@ def test_stats_are_json_with_the_viewer_counters(make_viewer):
     assert stats['latency_ms_p99'] is None
     assert (stats['width'], stats['height'], stats['encoding']) == (W, H, 'bgr8')
     assert stats['topic'] == '/usb_camera/image'
-    assert stats['clients'] == 1
+    assert stats['clients'] == 1 and stats['mjpeg_clients'] == 1
     assert stats['encoded_frames'] == 1
     client.close()
 
