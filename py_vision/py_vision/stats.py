@@ -37,6 +37,19 @@ def percentile(sorted_values, fraction):
     return sorted_values[rank]
 
 
+def gap_worth_saying(snapshot):
+    """
+    Return the longest gap of a snapshot when it is worth a line, else None.
+
+    A gap counts when it is over a second and over five frame periods. Right after an outage
+    the window may hold a single frame, so no rate: the gap then counts from a second on
+    (it once went unsaid there, the threshold being five periods of a rate of zero).
+    """
+    gap, fps = snapshot['longest_gap_s'], snapshot['fps']
+    threshold = max(1.0, 5.0 / fps) if fps > 0 else 1.0
+    return gap if gap > threshold else None
+
+
 class StreamStats:
     """Counts what a subscriber receives; `snapshot()` summarises the recent window."""
 

@@ -32,7 +32,7 @@ from py_vision.cv_bridge import CvBridge, CvBridgeError, cvtColorForDisplay
 from py_vision.diagnostics import Diagnostics, OK, Recent, Status, WARN
 from py_vision.node_main import main_for
 from py_vision.params import ConfigError, Parameters, Spec, viewer_specs
-from py_vision.stats import stamp_age_s, StreamStats
+from py_vision.stats import gap_worth_saying, stamp_age_s, StreamStats
 from py_vision.transport import (
     jpeg_size, MAX_IMAGE, subscribe, TRANSPORTS, video_fields, VIDEO_TRANSPORTS)
 from py_vision.viewer.display import Display, DISPLAYS
@@ -178,9 +178,8 @@ class VideoSubscriber(Node):
             self.get_logger().info('no frames on %s in the last %.3g s (%d received in total)' % (
                 topic, self.stats_period, s['frames']))
         else:
-            gap = ''
-            if s['longest_gap_s'] > max(1.0, 5.0 / max(s['fps'], 1e-3)):
-                gap = ', gap of %.2f s' % s['longest_gap_s']
+            longest = gap_worth_saying(s)
+            gap = '' if longest is None else ', gap of %.2f s' % longest
             rate = ('%.1f fps' % s['fps']) if s['fps'] > 0 else 'rate not measured yet'
             latency = 'without a stamp (no latency)'
             if s['latency_ms_p50'] is not None:
