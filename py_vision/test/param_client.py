@@ -29,13 +29,19 @@ from ros_harness import wait_until
 # again, as a user repeats `ros2 param get`.
 RESEND_AFTER_S = 4.0
 ANSWER_WITHIN_S = 20.0
+DISCOVERED_WITHIN_S = 20.0
+
+
+class NotDiscovered(AssertionError):
+    """The peer did not find the node's service within DISCOVERED_WITHIN_S (a DDS matter)."""
 
 
 def _call(peer, node_name, service_type, service, request):
     client = peer.node.create_client(service_type, '/%s/%s' % (node_name, service))
     try:
-        assert client.wait_for_service(timeout_sec=20), 'no %s service on %s' % (
-            service, node_name)
+        if not client.wait_for_service(timeout_sec=DISCOVERED_WITHIN_S):
+            raise NotDiscovered('no %s service on %s (%s)' % (
+                service, node_name, _graph(peer, node_name, service)))
         deadline = time.monotonic() + ANSWER_WITHIN_S
         while True:
             future = client.call_async(request)
@@ -51,6 +57,26 @@ def _call(peer, node_name, service_type, service, request):
                         ANSWER_WITHIN_S, service, node_name)) from None
     finally:
         peer.node.destroy_client(client)  # a test calling many times keeps one client at a time
+
+
+def _graph(peer, node_name, service):
+    """
+    Say what this peer's graph holds for /node_name/service, and every node it sees.
+
+    A client finds a service ready once the graph holds as many request readers as reply
+    writers for it, and it has matched both (rmw_fastrtps): the endpoints listed here, by
+    node, say which of these failed.
+    """
+    name = '/%s/%s' % (node_name, service)
+
+    def owners(infos):
+        return sorted('%s/%s' % (info.node_namespace.rstrip('/'), info.node_name)
+                      for info in infos) or 'none'
+    readers = peer.node.get_subscriptions_info_by_topic('rq%sRequest' % name, no_mangle=True)
+    writers = peer.node.get_publishers_info_by_topic('rr%sReply' % name, no_mangle=True)
+    return 'in the graph, request readers of %s: %s; reply writers: %s; nodes: %s' % (
+        name, owners(readers), owners(writers), sorted(
+            ns.rstrip('/') + '/' + each for each, ns in peer.node.get_node_names_and_namespaces()))
 
 
 def parameter_value(value):
@@ -76,12 +102,9 @@ def _one_each(peer, node_name, service, names, answer):
     # in the graph could have answered, rather than fail later on an empty list.
     if len(answer) != len(names):
         raise AssertionError(
-            '%s of %s answered %d item(s) for %d name(s) %s: one of them is not declared '
-            '(servers of /%s/%s in the graph: %d; nodes: %s)' % (
-                service, node_name, len(answer), len(names), list(names), node_name, service,
-                peer.node.count_services('/%s/%s' % (node_name, service)),
-                sorted(ns.rstrip('/') + '/' + name
-                       for name, ns in peer.node.get_node_names_and_namespaces())))
+            '%s of %s answered %d item(s) for %d name(s) %s: one of them is not declared (%s)' % (
+                service, node_name, len(answer), len(names), list(names),
+                _graph(peer, node_name, service)))
     return answer
 
 

@@ -25,6 +25,12 @@ Nothing here is timed: the waits are bounds a healthy node never comes near, and
 moment only moves where the signal falls. The rounds are many enough to catch a node that
 ignores one signal in three with a probability of 1 - (2/3)**ROUNDS per lane (98% for 10);
 PY_VISION_STOP_ROUNDS asks for more (a soak).
+
+On the boards' Fast DDS 2.6.0 (Humble), a process started while others come and go is, now and
+then, not discovered at all: no service, no frames, for longer than any bound (docs/boards.md,
+"A node nobody hears"). Such a round still sends its signal and must still stop cleanly; its
+lane then takes a new peer, and the test fails when that happens twice in a row in a lane or in
+more than one round in MAX_UNDISCOVERED, and on any other distribution at all.
 """
 
 import os
@@ -33,8 +39,9 @@ import signal
 import subprocess
 import threading
 import time
+import warnings
 
-from param_client import describe_parameters, get_parameters, set_parameter
+from param_client import describe_parameters, get_parameters, NotDiscovered, set_parameter
 import ros_harness
 
 ROUNDS = int(os.environ.get('PY_VISION_STOP_ROUNDS', '10'))
@@ -72,27 +79,43 @@ LANES = [
 ]
 # What a node logs while it cleans up, before node_main's last line.
 CLEANED_UP = {'usbcam_publisher': 'camera released after'}
+# On Humble (Fast DDS 2.6.0), at most one node start in this many may go undiscovered: measured
+# here about one in 100 to 300 starts with four lanes restarting at once (docs/boards.md).
+MAX_UNDISCOVERED = 10
 
 
 def one_round(lane, number, rng, env, peer):
-    """Run one round; return None or what went wrong, with the node's log."""
+    """
+    Run one round; return (None or what went wrong with the node's log, undiscovered).
+
+    undiscovered: None, or why the peer never found the node (Humble's Fast DDS only: anywhere
+    else that is what went wrong).
+    """
     executable, node_name, remaps = lane
     sig = rng.choice([signal.SIGINT, signal.SIGTERM])
     node = ros_harness.NodeProcess(
         executable, ros_harness.ros_args(RUNNABLE[executable], remaps), env,
         name='%s_%d' % (node_name, number))
+    undiscovered = None
     try:
-        for name, value in SETS[executable]:
-            set_parameter(peer, node_name, name, value)
-        get_parameters(peer, node_name, READ[executable])
-        describe_parameters(peer, node_name, READ[executable])
+        try:
+            for name, value in SETS[executable]:
+                set_parameter(peer, node_name, name, value)
+            get_parameters(peer, node_name, READ[executable])
+            describe_parameters(peer, node_name, READ[executable])
+            last = 'parameter call'
+        except NotDiscovered as error:
+            if not ros_harness.ON_HUMBLE:
+                raise
+            undiscovered = '%s round %d: %s' % (node_name, number, error)
+            last = 'attempt to find it'
         delay = rng.uniform(0.0, 0.5)
         time.sleep(delay)  # the random moment itself, not a synchronisation
-        what = '%s round %d, %s %.2f s after the last parameter call' % (
-            node_name, number, signal.Signals(sig).name, delay)
+        what = '%s round %d, %s %.2f s after the last %s' % (
+            node_name, number, signal.Signals(sig).name, delay, last)
         if node.proc.poll() is not None:
             return '%s: exited with %s before the signal\n%s' % (
-                what, node.proc.returncode, node.tail())
+                what, node.proc.returncode, node.tail()), undiscovered
         node.proc.send_signal(sig)
         try:
             status = node.proc.wait(STOP_BOUND_S)
@@ -102,17 +125,18 @@ def one_round(lane, number, rng, env, peer):
             os.killpg(node.proc.pid, signal.SIGKILL)
             node.proc.wait()
             return '%s: still running %.0f s after the signal (ignored it; killed)\n%s' % (
-                what, STOP_BOUND_S, log)
+                what, STOP_BOUND_S, log), undiscovered
         lines = node.output().splitlines()
         stopped = 'stopped by %s' % signal.Signals(sig).name
         if status != 0 or not lines or stopped not in lines[-1]:
             return '%s: exit status %s, last line %r (expected status 0 and %r)\n%s' % (
-                what, status, lines[-1] if lines else '', stopped, node.tail())
+                what, status, lines[-1] if lines else '', stopped, node.tail()), undiscovered
         if executable in CLEANED_UP and CLEANED_UP[executable] not in node.output():
-            return '%s: no %r line\n%s' % (what, CLEANED_UP[executable], node.tail())
-        return None
+            return '%s: no %r line\n%s' % (
+                what, CLEANED_UP[executable], node.tail()), undiscovered
+        return None, undiscovered
     except AssertionError as error:  # a parameter call went unanswered
-        return '%s round %d: %s\n%s' % (node_name, number, error, node.tail())
+        return '%s round %d: %s\n%s' % (node_name, number, error, node.tail()), undiscovered
     finally:
         node.kill()
 
@@ -120,19 +144,32 @@ def one_round(lane, number, rng, env, peer):
 def test_every_node_stops_on_every_signal_after_parameter_calls(ros_env, domain_id):
     seed = random.randrange(1 << 30)
     failures = []
+    undiscovered = []
 
     def rounds(lane):
         node_name = lane[1]
         rng = random.Random('%d %s' % (seed, node_name))
         peer = ros_harness.RosPeer(domain_id, name='param_client_%s' % node_name)
+        previous = None
         try:
             for number in range(ROUNDS):
-                failure = one_round(lane, number, rng, ros_env, peer)
+                failure, lost = one_round(lane, number, rng, ros_env, peer)
                 if failure:
                     # The lane ends here: a killed node's DDS participant outlives it until
                     # its lease expires, and would answer for the next round's discovery.
                     failures.append("%s (the lane's other rounds were not run)" % failure)
                     return
+                if lost:
+                    undiscovered.append(lost)
+                    if previous:
+                        failures.append('%s\nand in the next round, with a new peer:\n%s' % (
+                            previous, lost))
+                        return
+                    # It may be this peer that nobody hears: the next round asks with a new one.
+                    peer.close()
+                    peer = ros_harness.RosPeer(
+                        domain_id, name='param_client_%s_%d' % (node_name, number))
+                previous = lost
         except Exception as error:  # the test's own peer failed: say so, do not hang
             failures.append('%s: %s: %s' % (node_name, type(error).__name__, error))
         finally:
@@ -143,5 +180,14 @@ def test_every_node_stops_on_every_signal_after_parameter_calls(ros_env, domain_
         thread.start()
     for thread in threads:
         thread.join()
+    starts = ROUNDS * len(LANES)
+    said = '\n'.join(undiscovered)
+    if len(undiscovered) * MAX_UNDISCOVERED > starts:
+        failures.append('%d of %d node starts were never discovered (Humble allows one in %d):'
+                        '\n%s' % (len(undiscovered), starts, MAX_UNDISCOVERED, said))
+    elif undiscovered:
+        warnings.warn('Fast DDS 2.6.0 did not discover %d of %d node starts; each still stopped '
+                      'cleanly on its signal (docs/boards.md, "A node nobody hears"):\n%s' % (
+                          len(undiscovered), starts, said))
     assert not failures, '%d of %d lanes failed (seed %d, %d rounds a lane):\n\n%s' % (
         len(failures), len(LANES), seed, ROUNDS, '\n\n'.join(failures))
