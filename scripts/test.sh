@@ -103,8 +103,11 @@ check_ran_tests() {
 }
 
 status=0
-# -rs: each skipped test is listed with its reason at the end (in both runs).
-.venv/bin/python -m pytest py_vision/test petalinux/test -p no:cacheprovider -rs "$@" || status=$?
+# -rs: each skipped test is listed with its reason at the end, and --durations the slowest
+# tests with their times, which say where a run's time goes (in both runs).
+report=(-rs --durations=15)
+.venv/bin/python -m pytest py_vision/test petalinux/test -p no:cacheprovider "${report[@]}" "$@" \
+  || status=$?
 if [ "$status" = 5 ]; then
   echo '[test] pytest collected no tests: that is a failure' >&2
   exit 1
@@ -148,7 +151,7 @@ print("[test] Python", sys.version.split()[0], "numpy", numpy.__version__, "Open
       rclpy.__file__.split("/lib/python")[0])'
     # PY_VISION_VIVID=off: the vivid VM's tests are the main run's (docs/vivid.md says why).
     PY_VISION_BROWSER=off PY_VISION_VIVID=off python -m pytest py_vision/test \
-      --ignore=py_vision/test/browser -p no:cacheprovider -rs "$@"
+      --ignore=py_vision/test/browser -p no:cacheprovider "${report[@]}" "$@"
   ) || status=$?
   check_ran_tests "$status" 'board-version run' "$@"
 }
