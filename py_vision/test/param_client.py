@@ -32,16 +32,26 @@ ANSWER_WITHIN_S = 20.0
 DISCOVERED_WITHIN_S = 20.0
 
 
-class NotDiscovered(AssertionError):
-    """The peer did not find the node's service within DISCOVERED_WITHIN_S (a DDS matter)."""
+class Unreached(AssertionError):
+    """
+    DDS did not connect the peer to the node's service.
+
+    The peer found no ready service of the node within DISCOVERED_WITHIN_S, or no answer came
+    within ANSWER_WITHIN_S. endpoints_seen: whether the peer's graph held any request reader
+    or reply writer of the service when it gave up (None: the graph could not be read).
+    """
+
+    def __init__(self, message, endpoints_seen):
+        super().__init__(message)
+        self.endpoints_seen = endpoints_seen
 
 
 def _call(peer, node_name, service_type, service, request):
     client = peer.node.create_client(service_type, '/%s/%s' % (node_name, service))
     try:
         if not client.wait_for_service(timeout_sec=DISCOVERED_WITHIN_S):
-            raise NotDiscovered('no %s service on %s (%s)' % (
-                service, node_name, _graph(peer, node_name, service)))
+            said, seen = _graph(peer, node_name, service)
+            raise Unreached('no %s service on %s (%s)' % (service, node_name, said), seen)
         deadline = time.monotonic() + ANSWER_WITHIN_S
         while True:
             future = client.call_async(request)
@@ -53,8 +63,9 @@ def _call(peer, node_name, service_type, service, request):
             except AssertionError:
                 client.remove_pending_request(future)
                 if left <= RESEND_AFTER_S:
-                    raise AssertionError('timed out after %.1f s waiting for %s reply from %s' % (
-                        ANSWER_WITHIN_S, service, node_name)) from None
+                    said, seen = _graph(peer, node_name, service)
+                    raise Unreached('timed out after %.1f s waiting for %s reply from %s (%s)' % (
+                        ANSWER_WITHIN_S, service, node_name, said), seen) from None
     finally:
         peer.node.destroy_client(client)  # a test calling many times keeps one client at a time
 
@@ -63,20 +74,25 @@ def _graph(peer, node_name, service):
     """
     Say what this peer's graph holds for /node_name/service, and every node it sees.
 
-    A client finds a service ready once the graph holds as many request readers as reply
-    writers for it, and it has matched both (rmw_fastrtps): the endpoints listed here, by
-    node, say which of these failed.
+    Return (what it says, whether any endpoint of the service is in the graph; None when the
+    graph cannot be read). A client finds a service ready once the graph holds as many request
+    readers as reply writers for it, and it has matched both (rmw_fastrtps): the endpoints
+    listed here, by node, say which of these failed.
     """
     name = '/%s/%s' % (node_name, service)
 
     def owners(infos):
         return sorted('%s/%s' % (info.node_namespace.rstrip('/'), info.node_name)
                       for info in infos) or 'none'
-    readers = peer.node.get_subscriptions_info_by_topic('rq%sRequest' % name, no_mangle=True)
-    writers = peer.node.get_publishers_info_by_topic('rr%sReply' % name, no_mangle=True)
+    try:
+        readers = peer.node.get_subscriptions_info_by_topic('rq%sRequest' % name, no_mangle=True)
+        writers = peer.node.get_publishers_info_by_topic('rr%sReply' % name, no_mangle=True)
+        nodes = sorted(ns.rstrip('/') + '/' + each
+                       for each, ns in peer.node.get_node_names_and_namespaces())
+    except Exception as error:  # say so in the failure, rather than replace it
+        return 'the graph could not be read: %s: %s' % (type(error).__name__, error), None
     return 'in the graph, request readers of %s: %s; reply writers: %s; nodes: %s' % (
-        name, owners(readers), owners(writers), sorted(
-            ns.rstrip('/') + '/' + each for each, ns in peer.node.get_node_names_and_namespaces()))
+        name, owners(readers), owners(writers), nodes), bool(readers or writers)
 
 
 def parameter_value(value):
@@ -104,7 +120,7 @@ def _one_each(peer, node_name, service, names, answer):
         raise AssertionError(
             '%s of %s answered %d item(s) for %d name(s) %s: one of them is not declared (%s)' % (
                 service, node_name, len(answer), len(names), list(names),
-                _graph(peer, node_name, service)))
+                _graph(peer, node_name, service)[0]))
     return answer
 
 
