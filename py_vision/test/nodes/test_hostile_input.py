@@ -237,6 +237,10 @@ def test_the_token_is_never_published_on_rosout(launch, peer, ros_env):
     alive(subscriber)
 
 
+# Times the 201 MB image is published, 30 s apart, before its refusal is missed.
+HUGE_ATTEMPTS = 3
+
+
 def resident_mb(node):
     with open('/proc/%d/status' % node.proc.pid) as status:
         return int(re.search(r'VmRSS:\s+(\d+)', status.read()).group(1)) / 1024
@@ -259,9 +263,19 @@ def test_an_image_over_the_limit_is_refused_and_its_memory_returns(launch, peer,
         return images.get_subscription_count() > 0
     wait_until(matched, 30, interval=0.1, what='the node to subscribe')
     before = resident_mb(node)
-    images.publish(Image(width=8192, height=8192, encoding='bgr8', step=8192 * 3,
-                         data=bytes(8192 * 8192 * 3)))
-    line = node.wait_for_output(r'WARN.*refused .*8192x8192.*', timeout=60).group(0)
+    huge = Image(width=8192, height=8192, encoding='bgr8', step=8192 * 3,
+                 data=bytes(8192 * 8192 * 3))
+    # The image crosses the middleware in some 3,200 fragments. On a loaded machine Fast DDS
+    # 2.6.0 (Humble) once delivered none of it in 60 s, the small frame before it delivered:
+    # it is published again (the publisher keeps only the newest) until the node refuses it.
+    for attempt in range(1, HUGE_ATTEMPTS + 1):
+        images.publish(huge)
+        try:
+            line = node.wait_for_output(r'WARN.*refused .*8192x8192.*', timeout=30).group(0)
+            break
+        except AssertionError:
+            if attempt == HUGE_ATTEMPTS:
+                raise
     assert 'max_image_mb' in line
     # What the middleware held for it is given back.
     try:
