@@ -37,21 +37,16 @@ class Unreached(AssertionError):
     DDS did not connect the peer to the node's service.
 
     The peer found no ready service of the node within DISCOVERED_WITHIN_S, or no answer came
-    within ANSWER_WITHIN_S. endpoints_seen: whether the peer's graph held any request reader
-    or reply writer of the service when it gave up (None: the graph could not be read).
+    within ANSWER_WITHIN_S; the message says what the peer's graph held then.
     """
-
-    def __init__(self, message, endpoints_seen):
-        super().__init__(message)
-        self.endpoints_seen = endpoints_seen
 
 
 def _call(peer, node_name, service_type, service, request):
     client = peer.node.create_client(service_type, '/%s/%s' % (node_name, service))
     try:
         if not client.wait_for_service(timeout_sec=DISCOVERED_WITHIN_S):
-            said, seen = _graph(peer, node_name, service)
-            raise Unreached('no %s service on %s (%s)' % (service, node_name, said), seen)
+            raise Unreached('no %s service on %s (%s)' % (
+                service, node_name, _graph(peer, node_name, service)))
         deadline = time.monotonic() + ANSWER_WITHIN_S
         while True:
             future = client.call_async(request)
@@ -63,9 +58,9 @@ def _call(peer, node_name, service_type, service, request):
             except AssertionError:
                 client.remove_pending_request(future)
                 if left <= RESEND_AFTER_S:
-                    said, seen = _graph(peer, node_name, service)
                     raise Unreached('timed out after %.1f s waiting for %s reply from %s (%s)' % (
-                        ANSWER_WITHIN_S, service, node_name, said), seen) from None
+                        ANSWER_WITHIN_S, service, node_name,
+                        _graph(peer, node_name, service))) from None
     finally:
         peer.node.destroy_client(client)  # a test calling many times keeps one client at a time
 
@@ -74,10 +69,9 @@ def _graph(peer, node_name, service):
     """
     Say what this peer's graph holds for /node_name/service, and every node it sees.
 
-    Return (what it says, whether any endpoint of the service is in the graph; None when the
-    graph cannot be read). A client finds a service ready once the graph holds as many request
-    readers as reply writers for it, and it has matched both (rmw_fastrtps): the endpoints
-    listed here, by node, say which of these failed.
+    A client finds a service ready once the graph holds as many request readers as reply
+    writers for it, and it has matched both (rmw_fastrtps): the endpoints listed here, by node,
+    say which of these failed.
     """
     name = '/%s/%s' % (node_name, service)
 
@@ -90,9 +84,9 @@ def _graph(peer, node_name, service):
         nodes = sorted(ns.rstrip('/') + '/' + each
                        for each, ns in peer.node.get_node_names_and_namespaces())
     except Exception as error:  # say so in the failure, rather than replace it
-        return 'the graph could not be read: %s: %s' % (type(error).__name__, error), None
+        return 'the graph could not be read: %s: %s' % (type(error).__name__, error)
     return 'in the graph, request readers of %s: %s; reply writers: %s; nodes: %s' % (
-        name, owners(readers), owners(writers), nodes), bool(readers or writers)
+        name, owners(readers), owners(writers), nodes)
 
 
 def parameter_value(value):
@@ -120,7 +114,7 @@ def _one_each(peer, node_name, service, names, answer):
         raise AssertionError(
             '%s of %s answered %d item(s) for %d name(s) %s: one of them is not declared (%s)' % (
                 service, node_name, len(answer), len(names), list(names),
-                _graph(peer, node_name, service)[0]))
+                _graph(peer, node_name, service)))
     return answer
 
 
