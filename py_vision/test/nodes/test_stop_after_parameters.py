@@ -107,7 +107,6 @@ def one_round(lane, number, rng, env, peer):
             if not ros_harness.ON_HUMBLE:
                 raise
             unreached = '%s round %d: %s\n%s' % (node_name, number, error, node.tail())
-        if unreached:
             last = 'attempt to reach it'
         else:
             for name, value in others:
