@@ -23,6 +23,7 @@ executables = {
     'usbcam_publisher': 'py_vision.usbcam_publisher',
     'usbcam_subscriber': 'py_vision.usbcam_subscriber',
     'cv_bridge_test': 'py_vision.cv_bridge_test',
+    'vision_step': 'py_vision.vision_step',
 }
 
 LAUNCHER = """{shebang}# {name}: the py_vision executable `ros2 run py_vision {name}` starts.

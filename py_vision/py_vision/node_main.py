@@ -65,7 +65,8 @@ class NodeProgram(Protocol):
     """
     What run() needs of a node class (an rclpy Node) and of the node it builds.
 
-    The class says what --help prints (NODE_NAME, PARAMETERS, SUMMARY), what it publishes
+    The class says what --help prints (NODE_NAME, PARAMETERS, SUMMARY; a classmethod
+    help_parameters(argv), where it has one, lists them instead), what it publishes
     before rclpy starts (PUBLISHES: dds.NO_IMAGES, OWN_SIZE or INPUT_SIZE, which sizes its
     shared memory) and its own commands (COMMANDS: a flag such as '--list-formats' -> a function
     of the command line returning the exit status, run instead of the node). Built with no
@@ -190,6 +191,13 @@ def _wants_help(argv):
     return any(arg in ('-h', '--help') for arg in argv[1:])
 
 
+def _help_parameters(node_class, argv) -> Sequence[Spec]:
+    """Return what --help lists: PARAMETERS, or what help_parameters(argv) says where defined."""
+    # Optional: a node whose parameters depend on its command line (vision_step: its step's).
+    more = getattr(node_class, 'help_parameters', None)
+    return node_class.PARAMETERS if more is None else more(argv)
+
+
 def _init_rclpy(argv):
     """
     Initialise rclpy with argv; return None, or what is wrong with the arguments in one line.
@@ -238,7 +246,7 @@ def run(node_class: Type[NodeProgram], args=None) -> int:
     """
     argv = list(sys.argv if args is None else args)
     if _wants_help(argv):
-        sys.stdout.write(help_text(node_class.NODE_NAME, node_class.PARAMETERS,
+        sys.stdout.write(help_text(node_class.NODE_NAME, _help_parameters(node_class, argv),
                                    node_class.SUMMARY))
         return 0
     # A node's own commands (COMMANDS: flag -> function(argv) -> exit status) run instead of

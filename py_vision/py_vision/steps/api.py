@@ -1,0 +1,94 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+What a processing step is, as vision_step (and cv_bridge_test) sees it.
+
+The smallest step is any object with `process(image, header)`: it gets the frame as a bgr8
+numpy image (height x width x 3, uint8, the step's to change) and the frame's
+std_msgs/Header, and returns the image to publish with that header, or None to publish
+nothing for this frame. Everything else is optional; the base class `Step` gives it all:
+
+- PARAMETERS: the step's own parameters (py_vision.params.Spec: typed, with a range or
+  choices, `live` when they may change while it runs). The node declares them beside its own,
+  so `--help`, `ros2 param describe` and `ros2 param set` show and take them like the node's.
+- start(context): called once, before the first frame, with a StepContext: the node (to
+  create publishers), the logger, the parameters' start-up values, `threads`, the shipped
+  models' paths. A step loads its models here. It returns nothing, or a short note for the
+  node's start-up line (say, the runtime and model files).
+- parameters_changed(changes): a live parameter was set (name -> checked value); return None to
+  accept, or why the change is refused.
+- close(): the node is stopping.
+
+process() runs on the node's worker thread, one frame at a time; the other hooks run on the
+executor's. A process() that raises is logged and counted, and the next frame is tried.
+"""
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, ClassVar, Dict, Optional, Protocol, Sequence, Tuple
+
+import numpy as np
+from py_vision.params import Spec
+
+__all__ = ['ProcessesFrames', 'Step', 'StepContext']
+
+
+class ProcessesFrames(Protocol):
+    """The smallest step: process(image, header) -> the image to publish, or None."""
+
+    def process(self, image: np.ndarray, header: Any) -> Optional[np.ndarray]:
+        """Process one bgr8 frame; return the bgr8 image to publish, or None."""
+        ...
+
+
+@dataclass
+class StepContext:
+    """What a step is given once, at start: the node and what it knows."""
+
+    node: Any                          # the rclpy Node running the step
+    logger: Any                        # the node's logger
+    parameters: Dict[str, Any]         # the step's parameters' start-up values (PARAMETERS)
+    threads: int = 1                   # the CPU threads a model may use
+    cancelled: Callable[[], bool] = lambda: False  # True once the node is stopping
+    model_path: Callable[[str], str] = field(default=lambda name: name)  # a shipped model's path
+
+    def create_publisher(self, msg_type, topic: str, depth: int = 10):
+        """Create a publisher of the node (reliable, keep-last depth)."""
+        return self.node.create_publisher(msg_type, topic, depth)
+
+
+class Step:
+    """A base class for steps: the optional parts of the API, each doing nothing."""
+
+    PARAMETERS: ClassVar[Sequence[Spec]] = ()
+
+    def start(self, context: StepContext) -> Optional[str]:
+        """Get ready (load models, create publishers); return a note for the start-up line."""
+        return None
+
+    def process(self, image: np.ndarray, header: Any) -> Optional[np.ndarray]:
+        """Process one bgr8 frame; return the bgr8 image to publish, or None."""
+        raise NotImplementedError('%s does not define process()' % type(self).__name__)
+
+    def parameters_changed(self, changes: Dict[str, Any]) -> Optional[str]:
+        """Take changed live parameters (name -> value); return None, or why they are refused."""
+        return None
+
+    def close(self) -> None:
+        """Release what the step holds; the node is stopping."""
+
+
+def step_parameters(step_class: type) -> Tuple[Spec, ...]:
+    """Return the parameters a step class declares (none for a plain object with process)."""
+    return tuple(getattr(step_class, 'PARAMETERS', ()))

@@ -1,0 +1,385 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+vision_step: runs one processing step (py_vision.steps) on the newest camera frame.
+
+Every image from usb_camera/image (or usb_camera/image/compressed with
+``image_transport:=compressed``) is converted to an OpenCV bgr8 image with the bridge and
+handed to the step `-p step:=NAME` names (a built-in by short name, or the user's own
+`module.path:Class`; steps/loader.py finds it). What the step returns goes out on
+vision_step/image with the header the frame came with (and, while it has subscribers, as JPEG
+on vision_step/image/compressed); None publishes nothing. A message the bridge cannot convert
+is logged (at most once per ERROR_LOG_PERIOD_S) and skipped; a step that raises is logged once
+per kind of failure and period, counted and shown in /diagnostics; the node keeps going. With
+`display` set, the processed frames are also shown, like the subscriber shows its own.
+
+The processing runs on a LatestFrameWorker, not in the subscription callback: a step slower
+than the camera works on the newest frame and counts the ones it skips, instead of working
+through a backlog of old frames. docs/processing.md explains it. cv_bridge_test is this node
+running the `circle` step under its own name and topic.
+"""
+
+from pathlib import Path
+import threading
+import traceback
+from typing import Any, Optional, Sequence, Tuple
+
+import numpy as np
+from py_vision import dds, ros_arguments
+from py_vision.cv_bridge import CvBridge, CvBridgeError
+from py_vision.diagnostics import Diagnostics, ERROR, OK, Recent, Status, WARN
+from py_vision.latest_frame import LatestFrameWorker
+from py_vision.node_main import main_for
+from py_vision.params import Parameters, Spec, viewer_specs
+from py_vision.qos import publisher_qos
+from py_vision.stats import stamp_age_s, StreamStats
+from py_vision.steps import loader
+from py_vision.steps.api import step_parameters, StepContext
+from py_vision.throttled_log import ThrottledLog
+from py_vision.transport import ImagePublisher, MAX_IMAGE, subscribe, TRANSPORTS
+from py_vision.viewer.display import Display, DISPLAYS
+from rclpy.node import Node
+from sensor_msgs.msg import CompressedImage
+
+ERROR_LOG_PERIOD_S = 5.0
+STATS_PERIOD_S = 5.0
+MAX_THREADS = 64
+# Skipping more than this fraction of the input lately is "cannot keep up" (WARN); a frame
+# skipped now and then on a loaded machine is not.
+SKIPPED_WARN_FRACTION = 0.1
+
+# The parameters of every node that runs a step, in the order --help shows them.
+INPUT_SPECS = viewer_specs('none', DISPLAYS) + (
+    Spec('image_transport', 'raw', 'raw: sensor_msgs/Image on usb_camera/image; '
+         'compressed: sensor_msgs/CompressedImage on usb_camera/image/compressed',
+         choices=TRANSPORTS),
+    MAX_IMAGE,
+)
+STEP_SPECS = (
+    Spec('step', 'circle', 'the processing step: a built-in one (%s) or your own as '
+         'module.path:Class (docs/processing.md)' % ', '.join(loader.BUILT_IN), check=bool,
+         accepted='%s or module.path:Class' % ', '.join(loader.BUILT_IN)),
+    Spec('threads', 1, 'CPU threads a step may give its model runtime', (1, MAX_THREADS)),
+)
+
+
+class ProcessingStats:
+    """The output stream's statistics and the worker's, safe to use from both threads."""
+
+    def __init__(self, worker: LatestFrameWorker):
+        self.worker = worker
+        self._output = StreamStats(window_s=STATS_PERIOD_S)
+        self._lock = threading.Lock()
+        self.failed = 0   # frames the step raised on
+        self.empty = 0    # frames the step returned None for
+
+    def add_output(self, age_s: Optional[float], width: int, height: int) -> int:
+        """Record one published frame and how old it was (None: not stamped); return how many."""
+        if age_s is not None:
+            self.worker.record_age(age_s)
+        with self._lock:
+            self._output.add(age_s, width, height, 'bgr8')
+            return self._output.frames
+
+    def add_error(self) -> int:
+        """Record one frame that could not be converted; return how many so far."""
+        with self._lock:
+            self._output.add_error()
+            return self._output.errors
+
+    def add_failure(self) -> int:
+        """Record one frame the step failed on; return how many so far."""
+        with self._lock:
+            self.failed += 1
+            return self.failed
+
+    def add_empty(self) -> None:
+        """Record one frame the step returned nothing for."""
+        with self._lock:
+            self.empty += 1
+
+    def snapshot(self) -> dict:
+        """Return the output's rate, latency and size, with the worker's counts and times."""
+        with self._lock:
+            output = self._output.snapshot()
+            output.update(failed=self.failed, nothing_returned=self.empty)
+        return dict(output, **self.worker.snapshot())
+
+
+def _where(error: BaseException) -> str:
+    """Return where error was raised, as `function (folder/file.py:line)`."""
+    frames = traceback.extract_tb(error.__traceback__)
+    if not frames:
+        return ''
+    last = frames[-1]
+    path = Path(last.filename)
+    return '%s (%s/%s:%d)' % (last.name, path.parent.name, path.name, last.lineno)
+
+
+def _given_step(argv: Sequence[str], node_name: str) -> str:
+    """Return the step the command line names (the default when none or unreadable)."""
+    try:
+        given = ros_arguments.given_parameters(
+            argv, ros_arguments.node_name(argv, node_name)).get('step')
+    except ValueError:  # --help still prints the node's own parameters
+        given = None
+    return str(given) if given else STEP_SPECS[0].default
+
+
+class VisionStep(Node):
+    """The processing node (node_main.NodeProgram): one step on the newest frame."""
+
+    NODE_NAME = 'vision_step'
+    OUTPUT_TOPIC = 'vision_step/image'
+    FIXED_STEP: Optional[str] = None  # a node that always runs one step has no `step`
+    COMMANDS = {}
+    PUBLISHES = dds.INPUT_SIZE
+    SUMMARY = ('Runs a processing step (-p step:=circle, hand_signs, faces or your own '
+               'module.path:Class) on the newest frame of usb_camera/image and publishes what '
+               'it returns on vision_step/image. With -p step:=NAME, --help also lists that '
+               "step's parameters.")
+    NODE_PARAMETERS: Tuple[Spec, ...] = INPUT_SPECS + STEP_SPECS
+    PARAMETERS: Tuple[Spec, ...] = NODE_PARAMETERS
+
+    worker = display = step = None  # what close() finds when start-up was interrupted
+    failed = False           # it never stops of an error of its own
+    _too_large_said = False  # the warning about frames larger than the segment
+
+    @classmethod
+    def help_parameters(cls, argv: Sequence[str]) -> Tuple[Spec, ...]:
+        """Return the parameters --help lists: the node's, then its step's (when it loads)."""
+        name = cls.FIXED_STEP or _given_step(argv, cls.NODE_NAME)
+        try:
+            step_class = loader.find(name)[1]
+        except loader.StepError:
+            return cls.NODE_PARAMETERS
+        return cls.NODE_PARAMETERS + step_parameters(step_class)
+
+    def __init__(self):
+        super().__init__(self.NODE_NAME)
+        params = Parameters(self)
+        values = {spec.name: params.declare(spec) for spec in self.NODE_PARAMETERS}
+        self.step_name = self.FIXED_STEP or values['step']
+        self.step_target, step_class = loader.find(self.step_name)
+        specs = step_parameters(step_class)
+        loader.check_parameters(self.step_name, specs, self.NODE_PARAMETERS)
+        self.step = loader.make(self.step_name, step_class)
+        step_values = {spec.name: params.declare(
+            spec, self._parameter_applier(spec.name) if spec.live else None) for spec in specs}
+
+        self.bridge_ = CvBridge()
+        self.display = Display(self.get_logger(), values['display'], values['web_host'],
+                               values['web_port'], self.OUTPUT_TOPIC, values['web_token'])
+        # Reliable with a queue of 10, the ROS 2 default: what the seed's rospy publisher
+        # gives, and both reliable and best-effort subscribers (rqt_image_view) receive it.
+        self.images = ImagePublisher(params, self.OUTPUT_TOPIC, publisher_qos(), self.bridge_,
+                                     lazy_raw=False)
+        self.publisher_ = self.images.raw
+        # Frames can wait in three places: the subscription's DDS history, the executor
+        # (which takes one message per callback) and the worker's slot. The callback only
+        # offers, so the executor never falls behind; keep-last 1 means that even when it is
+        # held up, DDS keeps only the newest frame for it; the slot holds one frame.
+        self.worker = LatestFrameWorker(self.process, on_error=self._worker_failed,
+                                        window_s=STATS_PERIOD_S, name='processing')
+        self.stats = ProcessingStats(self.worker)
+        self._failures = ThrottledLog(self.get_logger(), ERROR_LOG_PERIOD_S)
+        self._last_failure = ''
+        note = loader.start(self.step_name, self.step, StepContext(
+            node=self, logger=self.get_logger(), parameters=step_values,
+            threads=values.get('threads', 1), cancelled=lambda: self.worker.closed))
+        self.subscription_ = subscribe(self, 'usb_camera/image', values['image_transport'],
+                                       self.worker.offer, depth=1,
+                                       max_image_mb=values['max_image_mb'])
+        self._shown_lock = threading.Lock()
+        self._to_show: Optional[np.ndarray] = None
+        # OpenCV windows belong to the executor's thread: the worker hands frames over.
+        self._show_request = self.create_guard_condition(self._show_newest)
+        self.create_timer(STATS_PERIOD_S, self.report_stats)
+        # The panel shows the camera these frames come from, upstream of this node.
+        self.display.attach(self, self.stats, self.publisher_.topic_name,
+                            camera_topic=self.subscription_.topic_name)
+        self._recent = Recent()
+        self.diagnostics = Diagnostics(params, hardware_id=self.subscription_.topic_name)
+        self.diagnostics.add('processing', self.processing_status)
+        self.get_logger().info(self.startup_line(note))
+
+    def startup_line(self, note: Optional[str]) -> str:
+        """Return the start-up line: the step, what it reads and writes, and the step's note."""
+        return 'running step %s (%s) on images from %s, publishing them on %s%s' % (
+            self.step_name, self.step_target, self.subscription_.topic_name,
+            self.publisher_.topic_name, '; %s' % note if note else '')
+
+    def _parameter_applier(self, name):
+        def apply(value):
+            changed = getattr(self.step, 'parameters_changed', None)
+            if changed is None:
+                return None
+            try:
+                return changed({name: value})
+            except Exception as error:  # noqa: B902 - the step's own code
+                return 'step %s refused %s: %s: %s' % (
+                    self.step_name, name, type(error).__name__, error)
+        return apply
+
+    def process(self, msg):
+        """Convert, run the step on and publish one frame (on the worker's thread)."""
+        try:
+            if isinstance(msg, CompressedImage):
+                what = 'compressed image (format "%s")' % msg.format
+                image = self.bridge_.compressed_imgmsg_to_cv2(msg, 'bgr8')
+            else:
+                what = '%dx%d "%s" image' % (msg.width, msg.height, msg.encoding)
+                image = self.bridge_.imgmsg_to_cv2(msg, 'bgr8')
+        except CvBridgeError as error:
+            errors = self.stats.add_error()
+            self.get_logger().error(
+                'cannot convert a %s to bgr8, skipped: %s (%d skipped so far)' % (
+                    what, error, errors), throttle_duration_sec=ERROR_LOG_PERIOD_S)
+            return
+        # The bridge returns a writable image the node owns (a view of this message's data,
+        # or a converted copy): the step may draw on it in place.
+        try:
+            out = self.step.process(image, msg.header)
+            if out is not None and not (isinstance(out, np.ndarray) and out.dtype == np.uint8
+                                        and out.ndim == 3 and out.shape[2] == 3):
+                raise TypeError('process() returned %s, not a bgr8 image (height x width x 3 '
+                                'uint8 numpy array) or None' % _described(out))
+        except Exception as error:  # noqa: B902 - the step's own code: log, count, go on
+            if not self.worker.closed:
+                self._step_raised(error)
+            return
+        if self.worker.closed:
+            return  # close() was called: the node is being torn down, drop the frame
+        if out is None:
+            self.stats.add_empty()
+            return
+        rows, cols = out.shape[:2]
+        self.images.publish(msg.header, lambda: out)
+        age = stamp_age_s(self.get_clock().now().nanoseconds, msg.header.stamp)
+        if self.stats.add_output(age, cols, rows) == 1:
+            self.get_logger().info('first image: %dx%d %s' % (
+                cols, rows, 'jpeg' if isinstance(msg, CompressedImage) else msg.encoding))
+        if not self._too_large_said and not dds.frame_fits(out.nbytes):
+            self._too_large_said = True
+            self.get_logger().warning(
+                '%dx%d frames do not fit the shared memory this node sized at start-up for '
+                "the camera's default size: same-host subscribers get them late or not at "
+                'all; start it with -p image_width:=%d -p image_height:=%d (or the '
+                "camera's parameter file)" % (cols, rows, cols, rows))
+        if self.display.active:
+            with self._shown_lock:
+                self._to_show = out
+            self._show_request.trigger()
+
+    def _step_raised(self, error: Exception):
+        failed = self.stats.add_failure()
+        where = _where(error)
+        kind = '%s: %s' % (type(error).__name__, ' '.join(str(error).split()))
+        self._last_failure = kind
+        self._failures.error(
+            (type(error).__name__, where),
+            'step %s failed on a frame%s: %s; the frame is skipped, the node goes on '
+            '(%d failed so far)' % (self.step_name, ' in %s' % where if where else '', kind,
+                                    failed))
+
+    def _show_newest(self):
+        with self._shown_lock:
+            image, self._to_show = self._to_show, None
+        if image is not None:
+            self.display.show(image)
+
+    def _worker_failed(self, error):
+        self.get_logger().error('processing a frame failed: %s: %s' % (
+            type(error).__name__, error), throttle_duration_sec=ERROR_LOG_PERIOD_S)
+
+    def report_stats(self):
+        """Log one line: frames in, processed, skipped, processing time and output age."""
+        s = self.stats.snapshot()
+        line = 'frames in %d, processed %d, skipped %d' % (
+            s['frames_in'], s['processed'], s['skipped'])
+        if s['failed']:
+            line += ', step failed on %d' % s['failed']
+        if s['processing_ms_p50'] is not None:
+            line += ', processing p50 %.1f ms p99 %.1f ms' % (
+                s['processing_ms_p50'], s['processing_ms_p99'])
+        if s['age_ms_p50'] is not None:
+            line += ', output age p50 %.1f ms p99 %.1f ms, %.1f fps out' % (
+                s['age_ms_p50'], s['age_ms_p99'], s['fps'])
+        self.get_logger().info('%s on %s' % (line, self.publisher_.topic_name))
+
+    def processing_status(self):
+        """Return the step's status for /diagnostics: WARN when it falls behind or fails."""
+        s = self.stats.snapshot()
+        recent = self._recent.update(frames_in=s['frames_in'], skipped=s['skipped'],
+                                     errors=s['errors'], processed=s['processed'],
+                                     failed=s['failed'])
+        values = {'step': self.step_name,
+                  'input': self.subscription_.topic_name, 'output': self.publisher_.topic_name,
+                  'frames in': s['frames_in'], 'processed': s['processed'],
+                  'skipped': s['skipped'], 'not converted': s['errors'],
+                  'step failed': s['failed'], 'nothing returned': s['nothing_returned'],
+                  'processing p50 ms': s['processing_ms_p50'],
+                  'processing p99 ms': s['processing_ms_p99'],
+                  'output age p50 ms': s['age_ms_p50'], 'output age p99 ms': s['age_ms_p99'],
+                  'output rate': float(s['fps'])}
+        simulated = getattr(self.step, 'simulated_work_s', None)
+        if simulated is not None:
+            values['simulated work ms'] = simulated * 1e3
+        if recent['failed']:
+            values['last failure'] = self._last_failure
+            if recent['failed'] >= recent['processed']:
+                return Status(ERROR, 'step %s failed on every frame lately (%d): %s' % (
+                    self.step_name, recent['failed'], self._last_failure), values)
+            return Status(WARN, 'step %s failed on %d of the last %d frames: %s' % (
+                self.step_name, recent['failed'], recent['processed'], self._last_failure),
+                values)
+        if recent['frames_in'] and recent['skipped'] > SKIPPED_WARN_FRACTION * recent['frames_in']:
+            return Status(WARN, 'cannot keep up: skipped %d of the last %d frames' % (
+                recent['skipped'], recent['frames_in']), values)
+        if recent['errors']:
+            return Status(WARN, '%d frame(s) could not be converted lately' % recent['errors'],
+                          values)
+        if s['processing_ms_p50'] is None:
+            return Status(OK, 'no frames on %s lately' % self.subscription_.topic_name, values)
+        return Status(OK, 'keeping up: processing p50 %.1f ms' % s['processing_ms_p50'],
+                      values)
+
+    def close(self):
+        """Stop the worker (abandoning a step in progress), the step, the window or viewer."""
+        if self.worker is not None:
+            self.worker.close()
+        if self.step is not None:
+            closing = getattr(self.step, 'close', None)
+            if closing is not None:
+                try:
+                    closing()
+                except Exception as error:  # noqa: B902 - the step's own code
+                    self.get_logger().error('step %s failed to close: %s: %s' % (
+                        self.step_name, type(error).__name__, error))
+        if self.display is not None:
+            self.display.close()
+
+
+def _described(value: Any) -> str:
+    if isinstance(value, np.ndarray):
+        return 'a %s array of shape %s' % (value.dtype, value.shape)
+    return 'a %s' % type(value).__name__
+
+
+main = main_for(VisionStep)
+
+
+if __name__ == '__main__':
+    main()
