@@ -31,7 +31,7 @@ from py_vision.models.anchors import AnchorOptions, decode, DecodeOptions, ssd_a
 from py_vision.models.anchors import weighted_nms
 from py_vision.models.crops import letterbox
 from py_vision.models.files import shipped_model
-from py_vision.models.runtime import load, Model, ModelError
+from py_vision.models.runtime import check_shapes, load, Model
 
 __all__ = ['Face', 'FaceDetector', 'FACE_KEYPOINTS']
 
@@ -59,7 +59,7 @@ class FaceDetector:
     def __init__(self, model: Model, min_score: float = 0.5, nms_threshold: float = 0.3,
                  max_faces: int = 0):
         """Use a loaded face_detection_short_range model; max_faces 0 means no limit."""
-        _check_model(model, (1, _SIZE, _SIZE, 3), ((1, 896, 16), (1, 896, 1)))
+        check_shapes(model, [(1, _SIZE, _SIZE, 3)], ((1, 896, 16), (1, 896, 1)))
         self.model = model
         self.min_score = min_score
         self.nms_threshold = nms_threshold
@@ -87,12 +87,3 @@ class FaceDetector:
                               float(score),
                               crop.points_to_image(keypoints * _SIZE).astype(np.float32)))
         return faces
-
-
-def _check_model(model: Model, input_shape, output_shapes) -> None:
-    """Raise ModelError unless the model has the inputs and outputs this code decodes."""
-    got_in = tuple(tuple(info.shape) for info in model.inputs)
-    got_out = tuple(tuple(info.shape) for info in model.outputs)
-    if got_in != (tuple(input_shape),) or got_out[:len(output_shapes)] != tuple(output_shapes):
-        raise ModelError('%s: not the model expected here: inputs %s, outputs %s; expected %s '
-                         'and %s' % (model.path, got_in, got_out, (input_shape,), output_shapes))

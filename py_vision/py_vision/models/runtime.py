@@ -35,7 +35,8 @@ from typing import Callable, Dict, List, Optional, Protocol, Sequence, Tuple
 import numpy as np
 from py_vision.models.onnx_graph import OnnxFormatError, read_signature
 
-__all__ = ['load', 'Model', 'ModelError', 'RUNTIMES', 'RuntimeMissing', 'TensorInfo']
+__all__ = ['check_shapes', 'load', 'Model', 'ModelError', 'RUNTIMES', 'RuntimeMissing',
+           'TensorInfo']
 
 
 class ModelError(Exception):
@@ -116,6 +117,17 @@ def _check_arrays(model: 'Model', arrays: Sequence[np.ndarray]) -> List[np.ndarr
             array = array.astype(info.dtype)
         checked.append(np.ascontiguousarray(array))
     return checked
+
+
+def check_shapes(model: Model, inputs: Sequence[Tuple[int, ...]],
+                 outputs: Sequence[Tuple[int, ...]]) -> None:
+    """Raise ModelError unless the model has these input shapes and (at least) these outputs."""
+    got_in = tuple(tuple(info.shape) for info in model.inputs)
+    got_out = tuple(tuple(info.shape) for info in model.outputs)
+    want_in, want_out = tuple(map(tuple, inputs)), tuple(map(tuple, outputs))
+    if got_in != want_in or got_out[:len(want_out)] != want_out:
+        raise ModelError('%s: not the model expected here: its inputs are %s and outputs %s, '
+                         'expected %s and %s' % (model.path, got_in, got_out, want_in, want_out))
 
 
 def _shape_text(shape: Tuple[int, ...]) -> str:
