@@ -75,6 +75,9 @@ setup(
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', glob('config/*.xml') + glob('config/*.yaml')),
         ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
+        # The model files (about 4.3 MB), their licence and where they came from.
+        ('share/' + package_name + '/models',
+         glob('models/*.tflite') + ['models/LICENSE', 'models/README.md']),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

@@ -1,0 +1,97 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+A model's input cut from a camera frame, and the way back to the frame's pixels.
+
+`letterbox` fits the whole frame into a model's square input, keeping its aspect ratio and
+padding the rest with black (MediaPipe's detectors: keep_aspect_ratio, BORDER_ZERO);
+`rotated_crop` cuts a rotated square out of the frame (the hand landmark model's input: the
+hand turned upright). Both convert BGR to RGB, scale the values to the model's range, and
+return the affine matrix that maps the input's pixels back to the frame's.
+"""
+
+from dataclasses import dataclass
+import math
+from typing import Tuple
+
+import cv2
+import numpy as np
+
+__all__ = ['Crop', 'letterbox', 'rotated_crop']
+
+
+@dataclass
+class Crop:
+    """A model input (1, height, width, 3) float32 RGB and `to_image`, (2, 3) input -> frame."""
+
+    tensor: np.ndarray
+    to_image: np.ndarray
+
+    def points_to_image(self, points: np.ndarray) -> np.ndarray:
+        """Map (..., 2) points in input pixels to frame pixels."""
+        return points @ self.to_image[:, :2].T + self.to_image[:, 2]
+
+
+def _tensor(rgb: np.ndarray, value_range: Tuple[float, float]) -> np.ndarray:
+    low, high = value_range
+    scaled = rgb.astype(np.float32) * np.float32((high - low) / 255.0) + np.float32(low)
+    return scaled[None]
+
+
+def _check(image: np.ndarray) -> None:
+    if not isinstance(image, np.ndarray) or image.ndim != 3 or image.shape[2] != 3 \
+            or image.dtype != np.uint8 or min(image.shape[:2]) < 1:
+        raise ValueError('expected a bgr8 image (height, width, 3) uint8, got %s'
+                         % (getattr(image, 'shape', type(image).__name__),))
+
+
+def letterbox(image_bgr: np.ndarray, width: int, height: int,
+              value_range: Tuple[float, float]) -> Crop:
+    """Fit the whole image into width x height, centred, black bars where it does not reach."""
+    _check(image_bgr)
+    rows, columns = image_bgr.shape[:2]
+    scale = min(width / columns, height / rows)
+    fitted_w = max(1, int(round(columns * scale)))
+    fitted_h = max(1, int(round(rows * scale)))
+    left, top = (width - fitted_w) // 2, (height - fitted_h) // 2
+    resized = cv2.resize(image_bgr, (fitted_w, fitted_h), interpolation=cv2.INTER_AREA)
+    padded = cv2.copyMakeBorder(resized, top, height - fitted_h - top, left,
+                                width - fitted_w - left, cv2.BORDER_CONSTANT, value=0)
+    tensor = _tensor(cv2.cvtColor(padded, cv2.COLOR_BGR2RGB), value_range)
+    sx, sy = columns / fitted_w, rows / fitted_h
+    to_image = np.array([[sx, 0, -left * sx], [0, sy, -top * sy]], np.float64)
+    return Crop(tensor, to_image)
+
+
+def rotated_crop(image_bgr: np.ndarray, center: Tuple[float, float], side: float,
+                 rotation: float, size: int, value_range: Tuple[float, float]) -> Crop:
+    """
+    Cut a square of `side` pixels centred on `center`, turned by `rotation` radians.
+
+    The input's up (its -y) is the frame's direction (sin r, -cos r): a rotation of pi/2 takes
+    what points right in the frame to point up in the input. Outside the frame, the edge
+    pixels are repeated.
+    """
+    _check(image_bgr)
+    cos, sin = math.cos(rotation) * side / size, math.sin(rotation) * side / size
+    cx, cy = center
+    half = size / 2
+    to_image = np.array([[cos, -sin, cx - cos * half + sin * half],
+                         [sin, cos, cy - sin * half - cos * half]], np.float64)
+    crop = cv2.warpAffine(image_bgr, to_image, (size, size),
+                          flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                          borderMode=cv2.BORDER_REPLICATE)
+    return Crop(_tensor(cv2.cvtColor(crop, cv2.COLOR_BGR2RGB), value_range), to_image)

@@ -1,0 +1,338 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+Model runtimes: load a model file and run it, whichever runtime is installed.
+
+`load(path)` picks the runtime by the file's extension: `.tflite` through LiteRT
+(`ai_edge_litert`, pip install ai-edge-litert on a PC) or `tflite_runtime` (what an aarch64
+board can pip-install for Python 3.10); `.onnx` through onnxruntime where installed, else
+OpenCV's DNN module (the boards' OpenCV 4.6 has it). Every runtime is optional: a missing one
+is a `RuntimeMissing` naming the package to install. A file that is missing, empty, truncated
+or not a model is a `ModelError` whose one-line message names the file and what is wrong.
+
+The loaded `Model` says what it is (`runtime`, `inputs`, `outputs`) and checks the arrays it is
+given against its inputs before running. A Model is not thread-safe: one thread runs it.
+"""
+
+from dataclasses import dataclass
+import importlib
+import os
+from typing import Callable, Dict, List, Optional, Protocol, Sequence, Tuple
+
+import numpy as np
+from py_vision.models.onnx_graph import OnnxFormatError, read_signature
+
+__all__ = ['check_shapes', 'load', 'Model', 'ModelError', 'RUNTIMES', 'RuntimeMissing',
+           'TensorInfo']
+
+
+class ModelError(Exception):
+    """A model that cannot be loaded or run; the message is one line naming the file."""
+
+
+class RuntimeMissing(ModelError):
+    """The runtime a model needs is not installed; the message names the package to install."""
+
+
+@dataclass(frozen=True)
+class TensorInfo:
+    """One input or output of a model: its name, shape (-1 where open) and element type."""
+
+    name: str
+    shape: Tuple[int, ...]
+    dtype: np.dtype
+
+
+class Model(Protocol):
+    """A loaded model: what it is, and `run`, which checks its inputs and returns its outputs."""
+
+    path: str
+    runtime: str
+    threads: int
+    inputs: Tuple[TensorInfo, ...]
+    outputs: Tuple[TensorInfo, ...]
+
+    def run(self, *arrays: np.ndarray) -> List[np.ndarray]:
+        """Run on one array per input (checked); return one array per output, in order."""
+
+
+# The runtimes by the extension they load, in the order 'auto' tries them.
+RUNTIMES: Dict[str, Tuple[str, ...]] = {
+    '.tflite': ('litert', 'tflite_runtime'),
+    '.onnx': ('onnxruntime', 'opencv'),
+}
+
+_PACKAGES = {
+    'litert': 'ai-edge-litert',
+    'tflite_runtime': 'tflite-runtime',
+    'onnxruntime': 'onnxruntime',
+    'opencv': "opencv-python-headless (or the distribution's OpenCV)",
+}
+
+_NONE_INSTALLED = {
+    '.tflite': 'no TensorFlow Lite runtime: pip install ai-edge-litert (PC) or tflite-runtime '
+               '(aarch64 board)',
+    '.onnx': 'no ONNX runtime: pip install onnxruntime, or install OpenCV with its DNN module',
+}
+
+
+def _one_line(error: BaseException) -> str:
+    """Return a runtime's exception as one line: its last line (OpenCV's is the reason)."""
+    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+    return lines[-1] if lines else type(error).__name__
+
+
+def _check_arrays(model: 'Model', arrays: Sequence[np.ndarray]) -> List[np.ndarray]:
+    """Return the arrays, cast where safe, or raise ModelError saying which one is wrong."""
+    name = os.path.basename(model.path)
+    if len(arrays) != len(model.inputs):
+        raise ModelError('%s: takes %d input(s), got %d'
+                         % (name, len(model.inputs), len(arrays)))
+    checked = []
+    for number, (array, info) in enumerate(zip(arrays, model.inputs)):
+        array = np.asarray(array)
+        shape = tuple(array.shape)
+        fits = len(shape) == len(info.shape) and all(
+            want < 0 or want == got for want, got in zip(info.shape, shape))
+        if not fits:
+            raise ModelError("%s: input %d '%s' wants shape %s, got %s"
+                             % (name, number, info.name, _shape_text(info.shape), shape))
+        if array.dtype != info.dtype:
+            if not np.can_cast(array.dtype, info.dtype, 'same_kind'):
+                raise ModelError("%s: input %d '%s' wants %s values, got %s"
+                                 % (name, number, info.name, info.dtype, array.dtype))
+            array = array.astype(info.dtype)
+        checked.append(np.ascontiguousarray(array))
+    return checked
+
+
+def check_shapes(model: Model, inputs: Sequence[Tuple[int, ...]],
+                 outputs: Sequence[Tuple[int, ...]]) -> None:
+    """Raise ModelError unless the model has these input shapes and (at least) these outputs."""
+    got_in = tuple(tuple(info.shape) for info in model.inputs)
+    got_out = tuple(tuple(info.shape) for info in model.outputs)
+    want_in, want_out = tuple(map(tuple, inputs)), tuple(map(tuple, outputs))
+    if got_in != want_in or got_out[:len(want_out)] != want_out:
+        raise ModelError('%s: not the model expected here: its inputs are %s and outputs %s, '
+                         'expected %s and %s' % (model.path, got_in, got_out, want_in, want_out))
+
+
+def _shape_text(shape: Tuple[int, ...]) -> str:
+    return '(%s)' % ', '.join('?' if size < 0 else str(size) for size in shape)
+
+
+class _TfliteModel:
+    """A .tflite model in LiteRT's or tflite_runtime's interpreter (the same Python API)."""
+
+    def __init__(self, path: str, threads: int, interpreter_module, runtime: str):
+        self.path = path
+        self.runtime = runtime
+        self.threads = threads
+        try:
+            self._interpreter = interpreter_module.Interpreter(model_path=path,
+                                                               num_threads=threads)
+            self._interpreter.allocate_tensors()
+        except (ValueError, RuntimeError) as error:
+            raise ModelError('%s: %s cannot load it: %s'
+                             % (path, runtime, _one_line(error))) from None
+        self._input_details = self._interpreter.get_input_details()
+        self._output_details = self._interpreter.get_output_details()
+        self.inputs = tuple(_tflite_info(detail) for detail in self._input_details)
+        self.outputs = tuple(_tflite_info(detail) for detail in self._output_details)
+
+    def run(self, *arrays: np.ndarray) -> List[np.ndarray]:
+        for detail, array in zip(self._input_details, _check_arrays(self, arrays)):
+            self._interpreter.set_tensor(detail['index'], array)
+        self._interpreter.invoke()
+        return [self._interpreter.get_tensor(detail['index']).copy()
+                for detail in self._output_details]
+
+
+def _tflite_info(detail: dict) -> TensorInfo:
+    signature = detail.get('shape_signature')
+    shape = signature if signature is not None and len(signature) else detail['shape']
+    return TensorInfo(detail['name'], tuple(int(size) for size in shape),
+                      np.dtype(detail['dtype']))
+
+
+def _signature(path: str) -> Tuple[Tuple[TensorInfo, ...], Tuple[TensorInfo, ...]]:
+    with open(path, 'rb') as model_file:
+        data = model_file.read()
+    try:
+        inputs, outputs = read_signature(data)
+    except OnnxFormatError as error:
+        raise ModelError('%s: not an ONNX model (the file %s)' % (path, error)) from None
+    return (tuple(TensorInfo(*item) for item in inputs),
+            tuple(TensorInfo(*item) for item in outputs))
+
+
+class _OnnxruntimeModel:
+    """An .onnx model in an onnxruntime session on the CPU."""
+
+    def __init__(self, path: str, threads: int, onnxruntime):
+        self.path = path
+        self.runtime = 'onnxruntime %s' % onnxruntime.__version__
+        self.threads = threads
+        self.inputs, self.outputs = _signature(path)
+        options = onnxruntime.SessionOptions()
+        options.intra_op_num_threads = threads
+        options.inter_op_num_threads = 1
+        try:
+            self._session = onnxruntime.InferenceSession(
+                path, sess_options=options, providers=['CPUExecutionProvider'])
+        except Exception as error:  # onnxruntime's own exception classes, not importable alike
+            raise ModelError('%s: onnxruntime cannot load it: %s'
+                             % (path, _one_line(error))) from None
+
+    def run(self, *arrays: np.ndarray) -> List[np.ndarray]:
+        feed = {info.name: array for info, array in zip(self.inputs, _check_arrays(self, arrays))}
+        return list(self._session.run([info.name for info in self.outputs], feed))
+
+
+class _OpencvModel:
+    """
+    An .onnx model in OpenCV's DNN module.
+
+    OpenCV's DNN runs on OpenCV's own thread pool, which the whole process shares
+    (cv2.setNumThreads): the model does not change it, and `threads` says what it is.
+    """
+
+    def __init__(self, path: str, threads: int, cv2):
+        self.path = path
+        self.runtime = 'OpenCV DNN %s' % cv2.__version__
+        self.inputs, self.outputs = _signature(path)
+        try:
+            self._net = cv2.dnn.readNetFromONNX(path)
+        except cv2.error as error:
+            raise ModelError('%s: OpenCV DNN cannot load it: %s'
+                             % (path, _one_line(error))) from None
+        self.threads = max(1, cv2.getNumThreads())
+        self._error = cv2.error
+
+    def run(self, *arrays: np.ndarray) -> List[np.ndarray]:
+        for info, array in zip(self.inputs, _check_arrays(self, arrays)):
+            self._net.setInput(array, info.name)
+        try:
+            results = self._net.forward([info.name for info in self.outputs])
+        except self._error as error:
+            raise ModelError('%s: OpenCV DNN cannot run it: %s'
+                             % (self.path, _one_line(error))) from None
+        return [np.asarray(result) for result in results]
+
+
+def _import(module: str):
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        return None
+
+
+def _version(distribution: str, module) -> str:
+    version = getattr(module, '__version__', None)
+    if version is None:
+        try:
+            from importlib.metadata import version as installed_version
+            version = installed_version(distribution)
+        except Exception:  # no metadata (a source install): say so rather than fail
+            version = '(version unknown)'
+    return version
+
+
+def _litert(path: str, threads: int) -> Optional[Model]:
+    interpreter = _import('ai_edge_litert.interpreter')
+    if interpreter is None:
+        return None
+    package = _import('ai_edge_litert')
+    return _TfliteModel(path, threads, interpreter,
+                        'LiteRT %s' % _version('ai-edge-litert', package))
+
+
+def _tflite_runtime(path: str, threads: int) -> Optional[Model]:
+    interpreter = _import('tflite_runtime.interpreter')
+    if interpreter is None:
+        return None
+    package = _import('tflite_runtime')
+    return _TfliteModel(path, threads, interpreter,
+                        'tflite_runtime %s' % _version('tflite-runtime', package))
+
+
+def _onnxruntime(path: str, threads: int) -> Optional[Model]:
+    onnxruntime = _import('onnxruntime')
+    return None if onnxruntime is None else _OnnxruntimeModel(path, threads, onnxruntime)
+
+
+def _opencv(path: str, threads: int) -> Optional[Model]:
+    cv2 = _import('cv2')
+    if cv2 is None or not hasattr(cv2, 'dnn'):
+        return None
+    return _OpencvModel(path, threads, cv2)
+
+
+_LOADERS: Dict[str, Callable[[str, int], Optional[Model]]] = {
+    'litert': _litert,
+    'tflite_runtime': _tflite_runtime,
+    'onnxruntime': _onnxruntime,
+    'opencv': _opencv,
+}
+
+# A .tflite file is a FlatBuffer with this identifier at bytes 4 to 8.
+_TFLITE_IDENTIFIER = b'TFL3'
+
+
+def _check_file(path: str, extension: str) -> None:
+    if not os.path.exists(path):
+        raise ModelError('%s: no such model file' % path)
+    if not os.path.isfile(path):
+        raise ModelError('%s: not a file' % path)
+    size = os.path.getsize(path)
+    if size == 0:
+        raise ModelError('%s: empty file, not a model' % path)
+    if extension == '.tflite':
+        with open(path, 'rb') as model_file:
+            head = model_file.read(8)
+        if len(head) < 8 or head[4:8] != _TFLITE_IDENTIFIER:
+            raise ModelError('%s: not a TensorFlow Lite model (no TFL3 identifier at its start)'
+                             % path)
+
+
+def load(path: str, threads: int = 1, runtime: str = 'auto') -> Model:
+    """
+    Load the model in `path` (.tflite or .onnx) with `threads` CPU threads.
+
+    `runtime` is 'auto' (the first installed of RUNTIMES[extension]) or one of them by name
+    ('litert', 'tflite_runtime' for .tflite; 'onnxruntime', 'opencv' for .onnx). Raises
+    ModelError (RuntimeMissing when the runtime is not installed) with a one-line message.
+    """
+    extension = os.path.splitext(path)[1].lower()
+    if extension not in RUNTIMES:
+        raise ModelError('%s: not a model file py_vision can run (it runs %s)'
+                         % (path, ' and '.join(sorted(RUNTIMES))))
+    if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
+        raise ModelError('%s: threads must be a whole number of 1 or more, not %r'
+                         % (path, threads))
+    choices = RUNTIMES[extension]
+    if runtime != 'auto' and runtime not in choices:
+        raise ModelError("%s: runtime '%s' does not run %s files (choose auto, %s)"
+                         % (path, runtime, extension, ', '.join(choices)))
+    _check_file(path, extension)
+    for name in choices if runtime == 'auto' else (runtime,):
+        model = _LOADERS[name](path, threads)
+        if model is not None:
+            return model
+    if runtime == 'auto':
+        raise RuntimeMissing('%s: %s' % (path, _NONE_INSTALLED[extension]))
+    raise RuntimeMissing("%s: runtime '%s' is not installed: pip install %s"
+                         % (path, runtime, _PACKAGES[runtime]))
