@@ -217,8 +217,9 @@ class VisionStep(Node):
 
     def startup_line(self, note: Optional[str]) -> str:
         """Return the start-up line: the step, what it reads and writes, and the step's note."""
-        return 'running step %s (%s) on images from %s, publishing them on %s%s' % (
-            self.step_name, self.step_target, self.subscription_.topic_name,
+        target = '' if self.step_target == self.step_name else ' (%s)' % self.step_target
+        return 'running step %s%s on images from %s, publishing them on %s%s' % (
+            self.step_name, target, self.subscription_.topic_name,
             self.publisher_.topic_name, '; %s' % note if note else '')
 
     def _parameter_applier(self, name):
