@@ -1,0 +1,140 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The built-in model steps in the installed vision_step: hand_signs and faces.
+
+hand_signs on the synthetic camera (no hand in it): every Twist all zero and `hand_sign` saying
+so, seen by a subscriber of its own. faces on a real photograph (scikit-image's astronaut):
+the face where it is, in vision_msgs where installed, else in the JSON fallback.
+"""
+
+import json
+from pathlib import Path
+import signal
+
+import cv2
+from geometry_msgs.msg import Twist
+import numpy as np
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from ros_harness import wait_until
+from sensor_msgs.msg import Image
+from std_msgs.msg import String
+
+RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+CAMERA = {'video_device': 'synthetic', 'image_width': 320, 'image_height': 240,
+          'framerate': 10.0}
+# Where the astronaut's face is in skimage's astronaut.png (512x512), read off the picture
+# with a grid drawn on it: cheek to cheek x 180..265, brow to chin y 75..175; the box's centre
+# and side, in pixels, within TOLERANCE (the detector's box is square and a little larger).
+FACE_CENTER, FACE_SIZE, TOLERANCE = (225.0, 128.0), 95.0, 25.0
+
+
+def astronaut():
+    import skimage
+    path = Path(skimage.__file__).parent / 'data' / 'astronaut.png'
+    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    assert image is not None, 'cannot read %s' % path
+    return image
+
+
+def twist_values(msg):
+    return (msg.linear.x, msg.linear.y, msg.linear.z,
+            msg.angular.x, msg.angular.y, msg.angular.z)
+
+
+def test_hand_signs_on_a_camera_without_hands_stands_still(launch, peer):
+    twists = peer.collect(Twist, '/turtle1/cmd_vel', RELIABLE)
+    signs = peer.collect(String, 'hand_sign', RELIABLE)
+    images = peer.collect(Image, 'vision_step/image', RELIABLE)
+    node = launch('vision_step', params={'step': 'hand_signs', 'linear_speed': 2.0})
+    line = node.wait_for_output(r'running step hand_signs .*', timeout=60.0).group(0)
+    for words in ('palm_detection_lite.tflite', 'hand_landmark_lite.tflite',
+                  'Twist on /turtle1/cmd_vel', 'signs on /hand_sign'):
+        assert words in line, line
+    launch('usbcam_publisher', params=CAMERA)
+    wait_until(lambda: len(twists) >= 5 and len(signs) >= 5 and images, 60.0, interval=0.1,
+               what='five Twists, five signs and an image')
+    assert all(twist_values(msg) == (0.0,) * 6 for msg in list(twists)), list(twists)
+    assert {msg.data for msg in list(signs)} == {'no_hand'}
+    assert images[0].encoding == 'bgr8' and (images[0].width, images[0].height) == (320, 240)
+    assert node.stop(signal.SIGINT) == 0
+    assert 'Traceback' not in node.output()
+
+
+def vision_msgs_installed():
+    try:
+        import vision_msgs.msg  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def boxes_from_detection_array(msg):
+    out = []
+    for detection in msg.detections:
+        center = getattr(detection.bbox.center, 'position', detection.bbox.center)
+        out.append((center.x, center.y, detection.bbox.size_x, detection.bbox.size_y,
+                    detection.results[0].hypothesis.score))
+    return out
+
+
+def boxes_from_json(msg):
+    data = json.loads(msg.data)
+    return data['header'], [(d['bbox']['center_x'], d['bbox']['center_y'], d['bbox']['size_x'],
+                             d['bbox']['size_y'], d['score']) for d in data['detections']]
+
+
+def test_faces_finds_the_astronauts_face_and_publishes_it_with_the_frames_header(launch, peer):
+    if vision_msgs_installed():
+        from vision_msgs.msg import Detection2DArray
+        received = peer.collect(Detection2DArray, 'detections', RELIABLE)
+    else:
+        received = peer.collect(String, 'detections_json', RELIABLE)
+    images = peer.collect(Image, 'vision_step/image', RELIABLE)
+    node = launch('vision_step', params={'step': 'faces'})
+    line = node.wait_for_output(r'running step faces .*', timeout=60.0).group(0)
+    assert 'face_detection_short_range.tflite' in line, line
+    if not vision_msgs_installed():
+        assert ('vision_msgs is not installed: detections as JSON (std_msgs/String) on '
+                '/detections_json') in line, line
+    publisher = peer.node.create_publisher(Image, 'usb_camera/image', RELIABLE)
+    photo = astronaut()
+    msg = Image(height=photo.shape[0], width=photo.shape[1], encoding='bgr8',
+                step=photo.shape[1] * 3, data=photo.tobytes())
+    msg.header.frame_id = 'photo'
+
+    def answered():
+        msg.header.stamp.sec += 1
+        publisher.publish(msg)
+        return received and images
+    wait_until(answered, 30.0, interval=0.5, what='detections of the photograph')
+    first = received[0]
+    if vision_msgs_installed():
+        header, boxes = first.header, boxes_from_detection_array(first)
+        assert header.frame_id == 'photo' and header.stamp.sec >= 1
+    else:
+        header, boxes = boxes_from_json(first)
+        assert header['frame_id'] == 'photo' and header['stamp']['sec'] >= 1
+    assert len(boxes) == 1, boxes
+    x, y, width, height, score = boxes[0]
+    assert abs(x - FACE_CENTER[0]) < TOLERANCE and abs(y - FACE_CENTER[1]) < TOLERANCE, boxes
+    assert abs(width - FACE_SIZE) < TOLERANCE and abs(height - FACE_SIZE) < TOLERANCE, boxes
+    assert score > 0.5
+    # The box is drawn on the published image, the rest is the photograph.
+    drawn = np.frombuffer(bytes(images[0].data), np.uint8).reshape(photo.shape)
+    assert (drawn != photo).any(axis=2).sum() > 4 * FACE_SIZE
+    assert (drawn[300:, :] == photo[300:, :]).all()
+    assert node.stop(signal.SIGINT) == 0
+    assert 'Traceback' not in node.output()
