@@ -30,6 +30,8 @@ import subprocess
 import urllib.error
 import urllib.request
 
+from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
+from geometry_msgs.msg import Twist
 from lifecycle_client import Lifecycle
 from lifecycle_msgs.msg import Transition
 from param_client import get_parameters
@@ -52,6 +54,7 @@ PROMISED = {
     'camera.launch.py': CAMERA_ARGUMENTS,
     'pipeline.launch.py': CAMERA_ARGUMENTS | {'display', 'web_host', 'web_port', 'web_token'},
     'two_cameras.launch.py': CAMERA_ARGUMENTS | {'front_device', 'rear_device'},
+    'hand_signs.launch.py': CAMERA_ARGUMENTS | {'display', 'web_host', 'web_port', 'web_token'},
 }
 TOKEN = 'launch-test-token-0123456789'
 # Generous: Humble's launch, three nodes and their DDS discovery on a loaded 2-core machine.
@@ -208,6 +211,36 @@ def test_pipeline_viewer_arguments_reach_the_viewer(ros2_launch, peer):
     assert parameters(peer, 'cv_bridge_test', ['display']) == {'display': 'none'}
     wait_until(lambda: len(processed) >= 3, START_S, what='processed frames')
     stops_cleanly(proc, ['usbcam_publisher', 'cv_bridge_test', 'usbcam_subscriber'])
+
+
+def turtlesim_installed():
+    try:
+        get_package_share_directory('turtlesim')
+    except PackageNotFoundError:
+        return False
+    return True
+
+
+@needs_launch
+def test_hand_signs_runs_camera_step_viewer_and_turtlesim_where_installed(ros2_launch, peer):
+    twists = peer.collect(Twist, '/turtle1/cmd_vel')
+    shown = peer.collect(Image, '/vision_step/image')
+    proc = ros2_launch('hand_signs.launch.py', video_device='synthetic', framerate=10,
+                       image_width=320, image_height=240, display='web', web_port=0)
+    proc.wait_for_output(r'\[vision_step\]: running step hand_signs .*hand_landmark_lite',
+                         START_S)
+    proc.wait_for_output(r'\[usbcam_subscriber\]: browser viewer at http://127.0.0.1:\d+/',
+                         START_S)
+    assert parameters(peer, 'usbcam_subscriber', ['display']) == {'display': 'web'}
+    # The synthetic camera shows no hand: the turtle is told to stand still.
+    wait_until(lambda: len(twists) >= 3 and shown, START_S, what='Twists and processed frames')
+    assert all((t.linear.x, t.angular.z) == (0.0, 0.0) for t in list(twists))
+    nodes = ['usbcam_publisher', 'vision_step', 'usbcam_subscriber']
+    if turtlesim_installed():
+        nodes.append('turtlesim_node')
+    else:
+        assert 'turtlesim is not installed: not started' in proc.output(), proc.tail()
+    stops_cleanly(proc, nodes)
 
 
 @needs_launch

@@ -39,6 +39,7 @@ RUN_HERE = {
     'usbcam_publisher': {'video_device': 'synthetic'},
     'usbcam_subscriber': {'display': 'none', 'web_port': 0},
     'cv_bridge_test': {'web_port': 0},
+    'vision_step': {'web_port': 0},
 }
 # A camera control example: `    # name: example value` in its node's section.
 UNSET_LINE = re.compile(r'^    # ([a-z_]+): (\S.*)$', re.MULTILINE)
