@@ -30,6 +30,8 @@ given against its inputs before running. A Model is not thread-safe: one thread 
 from dataclasses import dataclass
 import importlib
 import os
+import subprocess
+import sys
 from typing import Callable, Dict, List, Optional, Protocol, Sequence, Tuple
 
 import numpy as np
@@ -260,10 +262,33 @@ def _litert(path: str, threads: int) -> Optional[Model]:
                         'LiteRT %s' % _version('ai-edge-litert', package))
 
 
+# tflite_runtime (2.14) does not verify a model file before using it: a truncated or damaged
+# one crashes the process (SIGSEGV) instead of raising. So the file is loaded once in a
+# process of its own first; LiteRT verifies, and needs no such probe.
+_PROBE = ('import sys\n'
+          'from tflite_runtime.interpreter import Interpreter\n'
+          'Interpreter(model_path=sys.argv[1]).allocate_tensors()\n')
+_PROBE_TIMEOUT = 300.0
+
+
+def _probe_tflite_runtime(path: str) -> None:
+    """Raise ModelError when loading the file crashes tflite_runtime in a process of its own."""
+    try:
+        result = subprocess.run([sys.executable, '-c', _PROBE, path], stdin=subprocess.DEVNULL,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                timeout=_PROBE_TIMEOUT)
+    except (OSError, subprocess.TimeoutExpired):
+        return  # no verdict: the load in this process says what it says
+    if result.returncode < 0:
+        raise ModelError('%s: tflite_runtime crashes loading it (signal %d): the file is '
+                         'truncated or damaged' % (path, -result.returncode))
+
+
 def _tflite_runtime(path: str, threads: int) -> Optional[Model]:
     interpreter = _import('tflite_runtime.interpreter')
     if interpreter is None:
         return None
+    _probe_tflite_runtime(path)
     package = _import('tflite_runtime')
     return _TfliteModel(path, threads, interpreter,
                         'tflite_runtime %s' % _version('tflite-runtime', package))
