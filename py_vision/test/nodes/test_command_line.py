@@ -31,16 +31,17 @@ import ros_harness
 from ros_harness import wait_until
 from sensor_msgs.msg import Image
 
-EXECUTABLES = ('usbcam_publisher', 'usbcam_subscriber', 'cv_bridge_test')
+EXECUTABLES = ('usbcam_publisher', 'usbcam_subscriber', 'cv_bridge_test', 'vision_step')
 # The node each one runs, with parameters that start it without a camera or a port.
 RUNNABLE = {
     'usbcam_publisher': {'video_device': 'synthetic', 'framerate': 30.0},
     'usbcam_subscriber': {'display': 'web', 'web_port': 0, 'stats_period': 1.0},
     'cv_bridge_test': {'display': 'web', 'web_port': 0},
+    'vision_step': {'display': 'web', 'web_port': 0},
 }
 # What each one prints once it is fully up.
 UP = {'usbcam_publisher': 'opened synthetic', 'usbcam_subscriber': 'browser viewer at',
-      'cv_bridge_test': 'publishing them on'}
+      'cv_bridge_test': 'publishing them on', 'vision_step': 'publishing them on'}
 # What each one prints last when it stops cleanly.
 STOPPED = {'usbcam_publisher': 'camera released after'}
 
