@@ -53,7 +53,7 @@ def tutorial_node(work_ms):
     import cv2
     from py_vision import dds
     from py_vision.cv_bridge import CvBridge
-    from py_vision.cv_bridge_test import CIRCLE_BGR, CIRCLE_CENTER, CIRCLE_RADIUS, \
+    from py_vision.steps.circle import CIRCLE_BGR, CIRCLE_CENTER, CIRCLE_RADIUS, \
         simulated_work
     import rclpy
     from rclpy.node import Node
