@@ -104,8 +104,8 @@ def test_an_upright_palm_gives_an_upright_region_above_it():
     ((-1, 0), -math.pi / 2, (-20, 0)),
     ((0, 1), math.pi, (0, 20)),  # fingers down
 ])
-def test_a_turned_palm_gives_a_region_turned_and_moved_towards_its_fingers(direction, rotation,
-                                                                          shift):
+def test_a_turned_palm_gives_a_region_turned_and_moved_to_its_fingers(
+        direction, rotation, shift):
     wrist = np.array([120.0, 220.0])
     region = hand_region(palm(wrist, wrist + 30 * np.array(direction)))
     assert abs(math.remainder(region.rotation - rotation, 2 * math.pi)) < 1e-6
