@@ -40,8 +40,8 @@ def installed(module):
 
 def needs(runtime):
     """Skip, saying so, where this run does not have the runtime (each one is optional)."""
-    module = {'onnxruntime': 'onnxruntime', 'opencv': 'cv2'}.get(runtime,
-                                                                   TFLITE_MODULES.get(runtime))
+    modules = dict(TFLITE_MODULES, onnxruntime='onnxruntime', opencv='cv2')
+    module = modules[runtime]
     if not installed(module):
         pytest.skip('%s is not installed in this run (%s)' % (runtime, sys.executable))
 
@@ -221,8 +221,8 @@ def test_no_onnx_runtime_at_all(monkeypatch, tiny_onnx):
     monkeypatch.setitem(sys.modules, 'cv2', None)
     with pytest.raises(RuntimeMissing) as raised:
         load(tiny_onnx)
-    assert 'no ONNX runtime: pip install onnxruntime' in one_line_naming(raised.value,
-                                                                        tiny_onnx)
+    message = one_line_naming(raised.value, tiny_onnx)
+    assert 'no ONNX runtime: pip install onnxruntime' in message
 
 
 def test_shipped_models_are_the_ones_the_readme_lists():
@@ -240,5 +240,5 @@ def test_shipped_models_are_the_ones_the_readme_lists():
 def test_a_model_not_shipped_is_a_model_error():
     with pytest.raises(ModelError) as raised:
         shipped_model('hand_landmark_full.tflite')
-    assert 'no such model shipped with py_vision' in one_line_naming(raised.value,
-                                                                    'hand_landmark_full.tflite')
+    message = one_line_naming(raised.value, 'hand_landmark_full.tflite')
+    assert 'no such model shipped with py_vision' in message

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 
-"""The sign classifier on hand-written landmark sets (test/hand_poses.py): every sign, both hands."""
+"""The sign classifier on hand-written landmark sets (test/hand_poses.py), both hands."""
 
 from hand_poses import FOLDED, HALF, place, pose, STRAIGHT, thumb_up
 from hand_poses import THUMB_ACROSS, THUMB_BESIDE, THUMB_OUT

@@ -1,0 +1,145 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+HandTracker: no hand where there is none; the hand region and the crop it cuts are right.
+
+No photograph of a hand ships in a package here, and a made-up picture of one would not be a
+hand to the model: the landmark path is checked geometrically instead (a marker drawn in a
+frame is found where the crop's matrix says), and the signs on landmark sets (test_signs).
+"""
+
+import math
+
+import cv2
+import numpy as np
+from photos import photo
+from py_vision.capture.synthetic_picture import synthetic_frame
+from py_vision.models.crops import rotated_crop
+from py_vision.models.hands import HAND_LANDMARKS, HandTracker
+from py_vision.models.palm import hand_region, Palm, upright_rotation
+from py_vision.models.runtime import ModelError
+import pytest
+
+NO_HANDS = ['astronaut.png', 'coffee.png', 'chelsea.png', 'rocket.jpg', 'camera.png',
+            'motorcycle_left.png', 'horse.png', 'coins.png']
+
+
+@pytest.fixture(scope='module')
+def tracker():
+    return HandTracker.from_files()
+
+
+@pytest.mark.parametrize('name', NO_HANDS)
+def test_photographs_without_hands_have_none(tracker, name):
+    assert tracker.find(photo(name)) == []
+
+
+def test_the_presence_score_turns_down_what_the_palm_detector_mistakes(tracker):
+    # The palm detector alone finds a "palm" in these photographs (a horse's leg, a wheel);
+    # the landmark model's presence score is what says there is no hand.
+    for name in ('motorcycle_left.png', 'horse.png'):
+        assert tracker.palms.detect(photo(name)), name
+        assert tracker.find(photo(name)) == [], name
+    permissive = HandTracker(tracker.palms.model, tracker.landmark_model, min_hand_score=0.0)
+    found = permissive.find(photo('horse.png'))
+    assert found, 'with no presence threshold the mistaken palm becomes a hand'
+    hand = found[0]
+    assert hand.landmarks.shape == (21, 3) and hand.landmarks.dtype == np.float32
+    assert hand.handedness in ('left', 'right') and 0 <= hand.score < 0.5
+
+
+@pytest.mark.parametrize('index', [0, 7, 45])
+def test_the_synthetic_camera_has_no_hand(tracker, index):
+    assert tracker.find(synthetic_frame(index, 640, 480)) == []
+
+
+@pytest.mark.parametrize('value', [0, 255])
+def test_a_blank_frame_has_no_hand(tracker, value):
+    assert tracker.find(np.full((480, 640, 3), value, np.uint8)) == []
+
+
+def test_the_mirror_setting_swaps_the_hand_it_reports(tracker):
+    frame = photo('horse.png')
+    plain = HandTracker(tracker.palms.model, tracker.landmark_model, min_hand_score=0.0)
+    mirrored = HandTracker(tracker.palms.model, tracker.landmark_model, min_hand_score=0.0,
+                           mirrored=True)
+    assert {plain.find(frame)[0].handedness, mirrored.find(frame)[0].handedness} == {
+        'left', 'right'}
+
+
+def test_the_landmark_names():
+    assert len(HAND_LANDMARKS) == 21
+    assert HAND_LANDMARKS[0] == 'wrist' and HAND_LANDMARKS[8] == 'index_tip'
+
+
+def palm(wrist, knuckle, box=(100.0, 200.0, 40.0, 40.0)):
+    keypoints = np.zeros((7, 2), np.float32)
+    keypoints[0], keypoints[2] = wrist, knuckle
+    return Palm(np.array(box, np.float32), 0.9, keypoints)
+
+
+def test_an_upright_palm_gives_an_upright_region_above_it():
+    region = hand_region(palm((120, 235), (120, 205)))
+    assert region.rotation == pytest.approx(0.0)
+    # Half the palm's height towards the fingers (up), 2.6 times its side.
+    assert (region.x, region.y) == pytest.approx((120.0, 200.0))
+    assert region.side == pytest.approx(104.0)
+
+
+@pytest.mark.parametrize('direction, rotation, shift', [
+    ((1, 0), math.pi / 2, (20, 0)),  # fingers to the right: turned a quarter clockwise
+    ((-1, 0), -math.pi / 2, (-20, 0)),
+    ((0, 1), math.pi, (0, 20)),  # fingers down
+])
+def test_a_turned_palm_gives_a_region_turned_and_moved_to_its_fingers(
+        direction, rotation, shift):
+    wrist = np.array([120.0, 220.0])
+    region = hand_region(palm(wrist, wrist + 30 * np.array(direction)))
+    assert abs(math.remainder(region.rotation - rotation, 2 * math.pi)) < 1e-6
+    assert (region.x - 120, region.y - 220) == pytest.approx(shift, abs=1e-4)
+
+
+def test_upright_rotation_is_within_a_half_turn():
+    for angle in np.linspace(-3 * math.pi, 3 * math.pi, 37):
+        end = np.array([math.cos(angle), -math.sin(angle)])
+        assert -math.pi <= upright_rotation(np.zeros(2), end) <= math.pi
+
+
+@pytest.mark.parametrize('rotation', [0.0, 0.6, math.pi / 2, -2.5])
+def test_the_crop_and_its_matrix_agree_on_where_a_marker_is(rotation):
+    # A red dot 30 px from the region's centre, towards its "up" (the turned -y): the crop
+    # shows it straight above its centre, and the matrix maps it back onto the dot.
+    frame = np.zeros((480, 640, 3), np.uint8)
+    center = np.array([300.0, 220.0])
+    up = np.array([math.sin(rotation), -math.cos(rotation)])
+    dot = center + 30 * up
+    cv2.circle(frame, (int(round(dot[0])), int(round(dot[1]))), 4, (0, 0, 255), -1)
+    crop = rotated_crop(frame, tuple(center), 120.0, rotation, 224, (0.0, 1.0))
+    assert crop.tensor.shape == (1, 224, 224, 3) and crop.tensor.dtype == np.float32
+    red = crop.tensor[0, :, :, 0]  # RGB now
+    ys, xs = np.nonzero(red > 0.5)
+    seen = np.array([xs.mean(), ys.mean()])
+    assert seen == pytest.approx([112, 112 - 30 * 224 / 120], abs=1.5)
+    assert crop.points_to_image(seen) == pytest.approx(dot, abs=1.0)
+
+
+def test_other_models_are_refused_by_name(tracker):
+    face = tracker.palms.model.path.replace('palm_detection_lite',
+                                            'face_detection_short_range')
+    with pytest.raises(ModelError, match='face_detection_short_range.tflite: not the model'):
+        HandTracker.from_files(palm_path=face)
+    with pytest.raises(ModelError, match='face_detection_short_range.tflite: not the model'):
+        HandTracker.from_files(landmark_path=face)
