@@ -22,6 +22,7 @@ the face where it is, in vision_msgs where installed, else in the JSON fallback.
 
 import json
 from pathlib import Path
+import re
 import signal
 
 import cv2
@@ -32,6 +33,8 @@ from ros_harness import wait_until
 from sensor_msgs.msg import Image
 from std_msgs.msg import String
 
+# The .tflite runtime and its version: LiteRT on a PC, tflite_runtime in the board-version run.
+RUNTIME = r'(LiteRT|tflite_runtime) \d+\.\d+'
 RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 CAMERA = {'video_device': 'synthetic', 'image_width': 320, 'image_height': 240,
           'framerate': 10.0}
@@ -60,6 +63,7 @@ def test_hand_signs_on_a_camera_without_hands_stands_still(launch, peer):
     images = peer.collect(Image, 'vision_step/image', RELIABLE)
     node = launch('vision_step', params={'step': 'hand_signs', 'linear_speed': 2.0})
     line = node.wait_for_output(r'running step hand_signs .*', timeout=60.0).group(0)
+    assert re.search(RUNTIME, line), line
     for words in ('palm_detection_lite.tflite', 'hand_landmark_lite.tflite',
                   'Twist on /turtle1/cmd_vel', 'signs on /hand_sign'):
         assert words in line, line
@@ -105,6 +109,7 @@ def test_faces_finds_the_astronauts_face_and_publishes_it_with_the_frames_header
     images = peer.collect(Image, 'vision_step/image', RELIABLE)
     node = launch('vision_step', params={'step': 'faces'})
     line = node.wait_for_output(r'running step faces .*', timeout=60.0).group(0)
+    assert re.search(RUNTIME, line), line
     assert 'face_detection_short_range.tflite' in line, line
     if not vision_msgs_installed():
         assert ('vision_msgs is not installed: detections as JSON (std_msgs/String) on '
