@@ -35,7 +35,7 @@ process() runs on the node's worker thread, one frame at a time; the other hooks
 executor's. A process() that raises is logged and counted, and the next frame is tried.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable, ClassVar, Dict, Optional, Protocol, Sequence, Tuple
 
 import numpy as np
@@ -52,6 +52,12 @@ class ProcessesFrames(Protocol):
         ...
 
 
+def shipped_model_path(name: str) -> str:
+    """Return the path of a model shipped in py_vision's share folder (ModelError: missing)."""
+    from py_vision.models.files import shipped_model  # the models only when a step asks
+    return shipped_model(name)
+
+
 @dataclass
 class StepContext:
     """What a step is given once, at start: the node and what it knows."""
@@ -61,7 +67,7 @@ class StepContext:
     parameters: Dict[str, Any]         # the step's parameters' start-up values (PARAMETERS)
     threads: int = 1                   # the CPU threads a model may use
     cancelled: Callable[[], bool] = lambda: False  # True once the node is stopping
-    model_path: Callable[[str], str] = field(default=lambda name: name)  # a shipped model's path
+    model_path: Callable[[str], str] = shipped_model_path  # a shipped model's path
 
     def create_publisher(self, msg_type, topic: str, depth: int = 10):
         """Create a publisher of the node (reliable, keep-last depth)."""

@@ -36,7 +36,6 @@ from typing import Any, Callable, Dict, List, Optional
 import cv2
 import numpy as np
 from py_vision.models.faces import Face, FaceDetector, MODEL_FILE as FACE_MODEL
-from py_vision.models.files import shipped_model
 from py_vision.params import Spec
 from py_vision.steps.api import Step, StepContext
 from std_msgs.msg import String
@@ -110,7 +109,7 @@ class Faces(Step):
     def start(self, context: StepContext) -> Optional[str]:
         """Load the model; publish vision_msgs where installed, else the JSON fallback."""
         self.min_score = context.parameters['min_score']
-        self.detector = FaceDetector.from_file(shipped_model(FACE_MODEL),
+        self.detector = FaceDetector.from_file(context.model_path(FACE_MODEL),
                                                threads=context.threads)
         topic = context.parameters['detections_topic']
         found = vision_msgs_publisher(context, topic)

@@ -28,7 +28,6 @@ from typing import Any, Dict, List, Optional, Tuple
 import cv2
 from geometry_msgs.msg import Twist
 import numpy as np
-from py_vision.models.files import shipped_model
 from py_vision.models.hands import Hand, HandTracker, LANDMARK_FILE
 from py_vision.models.palm import MODEL_FILE as PALM_FILE
 from py_vision.models.signs import classify
@@ -103,8 +102,8 @@ class HandSigns(Step):
     def start(self, context: StepContext) -> Optional[str]:
         """Load the two models; create the hand_sign and Twist publishers."""
         self.settings = dict(context.parameters)
-        self.tracker = HandTracker.from_files(shipped_model(PALM_FILE),
-                                              shipped_model(LANDMARK_FILE), context.threads)
+        self.tracker = HandTracker.from_files(context.model_path(PALM_FILE),
+                                              context.model_path(LANDMARK_FILE), context.threads)
         self.signs = context.create_publisher(String, 'hand_sign')
         self.twists = context.create_publisher(Twist, self.settings['cmd_vel_topic'])
         return '%s; %s and %s; signs on %s, Twist on %s' % (
