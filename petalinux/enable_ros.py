@@ -20,8 +20,9 @@ Usage: python3 petalinux/enable_ros.py PROJECT_DIR [--board B] [--check | --dry-
 
 The package lists come from petalinux/boards/<board>/user-rootfsconfig (declarations) and
 petalinux/boards/<board>/rootfs_config (enabled packages): the tutorial's ROS 2 packages, the
-Python modules py_vision imports (OpenCV, numpy, PyYAML) and xauth for ssh -X windows. The tool
-edits two project files, keeping every byte it has no reason to touch:
+Python modules py_vision imports (OpenCV, numpy, PyYAML), xauth for ssh -X windows and
+vision-msgs (the faces step's detections). The tool edits two project files, keeping every
+byte it has no reason to touch:
 
 - project-spec/meta-user/conf/user-rootfsconfig: PetaLinux reads every line that contains
   the config prefix as a declaration (comments too) and takes the name up to the next
@@ -462,7 +463,7 @@ def parse_args(argv):
     parser = argparse.ArgumentParser(
         prog='enable_ros.py',
         description='Declare and enable the rootfs packages py_vision needs (ROS 2, OpenCV, '
-                    'numpy, PyYAML, xauth) in a PetaLinux 2023.2 project '
+                    'numpy, PyYAML, xauth, vision-msgs) in a PetaLinux 2023.2 project '
                     '(user-rootfsconfig and rootfs_config).',
         epilog='Exit status: 0 done (--check: fully enabled), 1 --check: something is '
                'missing, 2 error.')

@@ -42,11 +42,11 @@ ROOTFS = Path('project-spec/configs/rootfs_config')
 CONFIG = Path('project-spec/configs/config')
 
 # The tutorial's eight packages, then what py_vision runs on whatever they bring (OpenCV's and
-# numpy's Python modules, PyYAML) and xauth for ssh -X windows: every board's fragments hold
-# these today, in this order.
+# numpy's Python modules, PyYAML), xauth for ssh -X windows and vision-msgs for the faces
+# step's detections: every board's fragments hold these today, in this order.
 TUTORIAL = ['packagegroup-petalinux-ros', 'packagegroup-petalinux-ros-dev', 'cv-bridge',
             'cv-bridge-dev', 'v4l2-camera', 'v4l2-camera-dev', 'turtlesim', 'turtlesim-dev']
-RUNTIME = ['python3-opencv', 'python3-numpy', 'python3-pyyaml', 'xauth']
+RUNTIME = ['python3-opencv', 'python3-numpy', 'python3-pyyaml', 'xauth', 'vision-msgs']
 PACKAGES = TUTORIAL + RUNTIME
 BOARDS = {'zub1cg': 'zub1cg-sbc-2023-2', 'u96v2': 'u96v2-sbc-2023-2',
           'uz7ev': 'uz7ev-evcc-2023-2'}
@@ -270,13 +270,13 @@ def test_is_not_set_lines_are_switched_in_place(tmp_path):
     # The tutorial's declarations stay as they are; py_vision's own packages are appended.
     assert (project / USER).read_bytes() == user_before + b''.join(
         b'CONFIG_%s\n' % name.encode() for name in RUNTIME)
-    assert 'user-rootfsconfig: declared 4, already 8' in result.stdout
-    assert 'rootfs_config: enabled 10, already 2' in result.stdout
+    assert 'user-rootfsconfig: declared 5, already 8' in result.stdout
+    assert 'rootfs_config: enabled 11, already 2' in result.stdout
 
 
 def test_a_tutorial_project_gets_exactly_what_py_vision_runs_on(tmp_path):
     # A project that followed the tutorial has the eight ROS packages and lacks OpenCV's and
-    # numpy's Python modules, PyYAML and xauth as packages of its own.
+    # numpy's Python modules, PyYAML, xauth and vision-msgs as packages of its own.
     project = make_project(tmp_path, 'zub1cg', 'tutorial')
     check = run_tool(project, '--check')
     assert check.returncode == 1
@@ -287,8 +287,8 @@ def test_a_tutorial_project_gets_exactly_what_py_vision_runs_on(tmp_path):
     before = (project / ROOTFS).read_text().split('\n')
     result = run_tool(project)
     assert result.returncode == 0, result.stderr
-    assert 'user-rootfsconfig: declared 4, already 8' in result.stdout
-    assert 'rootfs_config: enabled 4, already 8' in result.stdout
+    assert 'user-rootfsconfig: declared 5, already 8' in result.stdout
+    assert 'rootfs_config: enabled 5, already 8' in result.stdout
     after = (project / ROOTFS).read_text().split('\n')
     start = after.index('# user packages ') + 2
     block = after[start:after.index('', start)]
