@@ -46,7 +46,7 @@ from py_vision.params import Parameters, Spec, viewer_specs
 from py_vision.qos import publisher_qos
 from py_vision.stats import stamp_age_s, StreamStats
 from py_vision.steps import loader
-from py_vision.steps.api import step_parameters, StepContext
+from py_vision.steps.api import ProcessesFrames, step_parameters, StepContext
 from py_vision.throttled_log import ThrottledLog
 from py_vision.transport import ImagePublisher, MAX_IMAGE, subscribe, TRANSPORTS
 from py_vision.viewer.display import Display, DISPLAYS
@@ -153,7 +153,8 @@ class VisionStep(Node):
     NODE_PARAMETERS: Tuple[Spec, ...] = INPUT_SPECS + STEP_SPECS
     PARAMETERS: Tuple[Spec, ...] = NODE_PARAMETERS
 
-    worker = display = step = None  # what close() finds when start-up was interrupted
+    worker = display = None  # what close() finds when start-up was interrupted
+    step: Optional[ProcessesFrames] = None
     failed = False           # it never stops of an error of its own
     _too_large_said = False  # the warning about frames larger than the segment
 

@@ -23,10 +23,10 @@ one line naming the step, no traceback.
 """
 
 import importlib
-from typing import Any, Dict, Optional, Sequence, Tuple
+from typing import Dict, Optional, Sequence, Tuple
 
 from py_vision.params import ConfigError, Spec
-from py_vision.steps.api import step_parameters, StepContext
+from py_vision.steps.api import ProcessesFrames, step_parameters, StepContext
 
 __all__ = ['BUILT_IN', 'find', 'make', 'start', 'StepError']
 
@@ -93,7 +93,7 @@ def check_parameters(name: str, specs: Sequence[Spec], node_specs: Sequence[Spec
             name, ', '.join(clash)))
 
 
-def make(name: str, step_class: type) -> Any:
+def make(name: str, step_class: type) -> ProcessesFrames:
     """Return step_class(); raise StepError naming the step when its constructor fails."""
     try:
         return step_class()
@@ -102,7 +102,7 @@ def make(name: str, step_class: type) -> Any:
             name, step_class.__name__, _one_line(error))) from None
 
 
-def start(name: str, step: Any, context: StepContext) -> Optional[str]:
+def start(name: str, step: ProcessesFrames, context: StepContext) -> Optional[str]:
     """Start the step (its optional hook); return its note; raise StepError if it fails."""
     begin = getattr(step, 'start', None)
     if begin is None:
