@@ -67,6 +67,7 @@ _SIZE = 224
 # the knuckles whose mean with the middle one gives the hand's direction.
 _PALM = [0, 1, 2, 3, 5, 6, 9, 10, 13, 14, 17, 18]
 _INDEX_MCP, _MIDDLE_MCP, _RING_MCP = 5, 9, 13
+_Z_SPREAD = 0.4
 # Two regions this alike (IoU of their upright bounding squares) are one hand.
 _SAME_HAND = 0.5
 
@@ -186,7 +187,8 @@ class HandTracker:
         points = points.reshape(21, 3).astype(np.float64)
         landmarks = np.empty((21, 3), np.float32)
         landmarks[:, :2] = crop.points_to_image(points[:, :2])
-        landmarks[:, 2] = points[:, 2] * (region.side / _SIZE)
+        # z as MediaPipe scales it: like x, then divided by 0.4 (its training data's z spread).
+        landmarks[:, 2] = points[:, 2] * (region.side / _SIZE / _Z_SPREAD)
         # The model's 'Left' is a left hand as a mirror shows it (module docstring).
         looks_left = float(left.reshape(-1)[0]) > 0.5
         return Hand(landmarks, 'left' if looks_left == self.mirrored else 'right', score)
