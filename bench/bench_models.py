@@ -24,8 +24,11 @@ the board-version .venv-board) and 1 and 2 threads, it times per call:
   faces            FaceDetector.detect on a 640x480 frame with one face (the astronaut)
   hands, none      HandTracker.find on the synthetic camera's 640x480 frame: the palm
                    detector alone (no palm there)
-  hands, one       HandTracker.find with every threshold at 0 and at most one hand: the palm
-                   detector and one landmark pass, what a frame with one hand costs
+  hands, one       HandTracker.find with every threshold at 0 and at most one hand, not
+                   tracking: the palm detector and one landmark pass, what a frame with a new
+                   hand costs
+  hands, tracked   the same, tracking: the hand found in the previous frame is looked for
+                   where it was, one landmark pass and no palm detector (a hand followed)
   palm model, landmark model, face model: the model's run() alone
   reference        cv2.resize to 320x240 and cv2.imencode to JPEG of the same frame
 The cases run interleaved, one call each per round, so a busy machine slows them alike; each
@@ -78,14 +81,17 @@ def cases_for(runtime, threads, frames):
     faces = FaceDetector(face)
     tracker = HandTracker(palm, landmark)
     one_hand = HandTracker(palm, landmark, min_palm_score=0.0, min_hand_score=0.0,
-                           max_hands=1)
+                           max_hands=1, track=False)
+    tracked = HandTracker(palm, landmark, min_palm_score=0.0, min_hand_score=0.0, max_hands=1)
     assert len(one_hand.find(frames['synthetic'])) == 1
+    assert len(tracked.find(frames['synthetic'])) == 1
     assert tracker.find(frames['synthetic']) == []
     zeros = {m: np.zeros(m.inputs[0].shape, np.float32) for m in (palm, landmark, face)}
     return palm.runtime, {
         'faces': lambda: faces.detect(frames['face']),
         'hands, none': lambda: tracker.find(frames['synthetic']),
         'hands, one': lambda: one_hand.find(frames['synthetic']),
+        'hands, tracked': lambda: tracked.find(frames['synthetic']),
         'palm model': lambda: palm.run(zeros[palm]),
         'landmark model': lambda: landmark.run(zeros[landmark]),
         'face model': lambda: face.run(zeros[face]),

@@ -20,9 +20,15 @@ Hands and their 21 landmarks: MediaPipe's palm detector, then its hand landmark 
 `max_hands`) it cuts the hand's region (palm.hand_region), turned upright, into the landmark
 model's 224x224 input (values 0 to 1); the model gives 21 landmarks (HAND_LANDMARKS), a hand
 presence score and which hand it is; the landmarks go back into the frame through the crop's
-matrix. A region whose presence score is below `min_hand_score` is no hand. Each frame is
-searched afresh (MediaPipe also tracks a hand from the previous frame's landmarks to skip the
-palm detector; this does not).
+matrix. A region whose presence score is below `min_hand_score` is no hand.
+
+Tracking (`track=True`, the default, as MediaPipe does): the hands found in one frame give the
+regions to look at in the next (`landmark_region`: the square around the palm's landmarks,
+turned from the wrist to the knuckles, twice their size, a tenth towards the fingers), and the
+palm detector runs only while fewer than `max_hands` hands are tracked. With one hand tracked
+and max_hands=1, a frame costs one landmark pass instead of a palm detection and a landmark
+pass. A tracked hand whose presence score drops below `min_hand_score` is dropped, and the
+palm detector looks for hands again in the next frame. For unrelated pictures, track=False.
 
 Which hand: the model was trained on mirrored pictures (a selfie view) and answers 'Left' for
 what looks like a left hand in the picture. A camera that does not mirror (a USB camera as it
@@ -32,15 +38,17 @@ mirrored. Either way `handedness` is the hand of the person in front of the came
 """
 
 from dataclasses import dataclass
-from typing import List
+import math
+from typing import List, Optional
 
 import numpy as np
 from py_vision.models.crops import rotated_crop
 from py_vision.models.files import shipped_model
-from py_vision.models.palm import hand_region, MODEL_FILE as PALM_FILE, PalmDetector
+from py_vision.models.palm import enlarge, hand_region, HandRegion, MODEL_FILE as PALM_FILE
+from py_vision.models.palm import PalmDetector, upright_rotation
 from py_vision.models.runtime import check_shapes, load, Model
 
-__all__ = ['Hand', 'HAND_LANDMARKS', 'HandTracker', 'LANDMARK_FILE']
+__all__ = ['Hand', 'HAND_LANDMARKS', 'HandTracker', 'LANDMARK_FILE', 'landmark_region']
 
 LANDMARK_FILE = 'hand_landmark_lite.tflite'
 
@@ -55,6 +63,13 @@ HAND_LANDMARKS = (
 )
 
 _SIZE = 224
+# The landmarks that outline the palm (wrist, thumb base, each finger's first two joints), and
+# the knuckles whose mean with the middle one gives the hand's direction.
+_PALM = [0, 1, 2, 3, 5, 6, 9, 10, 13, 14, 17, 18]
+_INDEX_MCP, _MIDDLE_MCP, _RING_MCP = 5, 9, 13
+_Z_SPREAD = 0.4
+# Two regions this alike (IoU of their upright bounding squares) are one hand.
+_SAME_HAND = 0.5
 
 
 @dataclass
@@ -73,17 +88,58 @@ class Hand:
     score: float
 
 
+def landmark_region(landmarks: np.ndarray, scale: float = 2.0,
+                    shift: float = -0.1) -> HandRegion:
+    """
+    Return the region to look for a hand in the next frame, from its landmarks in this one.
+
+    Turned so that the wrist -> knuckles direction (the middle knuckle averaged with the mean
+    of the index and ring ones) points up; the box around the palm's landmarks in that turned
+    frame, `scale` times its longer side, moved `shift` times its height towards the fingers.
+    """
+    points = np.asarray(landmarks, np.float64)[:, :2]
+    knuckles = ((points[_INDEX_MCP] + points[_RING_MCP]) / 2 + points[_MIDDLE_MCP]) / 2
+    rotation = upright_rotation(points[0], knuckles)
+    palm = points[_PALM]
+    middle = (palm.min(axis=0) + palm.max(axis=0)) / 2
+    cos, sin = math.cos(rotation), math.sin(rotation)
+    # The palm's points in the region's own axes (turned back by the rotation).
+    relative = palm - middle
+    turned = np.stack([relative[:, 0] * cos + relative[:, 1] * sin,
+                       -relative[:, 0] * sin + relative[:, 1] * cos], axis=1)
+    low, high = turned.min(axis=0), turned.max(axis=0)
+    cx, cy = (low + high) / 2
+    center = middle + np.array([cx * cos - cy * sin, cx * sin + cy * cos])
+    width, height = high - low
+    return enlarge(float(center[0]), float(center[1]), float(width), float(height), rotation,
+                   scale, shift)
+
+
+def _overlap(a: HandRegion, b: HandRegion) -> float:
+    """Return the IoU of two regions' upright bounding squares."""
+    half_a = a.side * (abs(math.cos(a.rotation)) + abs(math.sin(a.rotation))) / 2
+    half_b = b.side * (abs(math.cos(b.rotation)) + abs(math.sin(b.rotation))) / 2
+    w = max(0.0, min(a.x + half_a, b.x + half_b) - max(a.x - half_a, b.x - half_b))
+    h = max(0.0, min(a.y + half_a, b.y + half_b) - max(a.y - half_a, b.y - half_b))
+    union = 4 * half_a * half_a + 4 * half_b * half_b - w * h
+    return w * h / union if union > 0 else 0.0
+
+
 class HandTracker:
-    """Finds hands and their landmarks in bgr8 frames."""
+    """Finds hands and their landmarks in bgr8 frames (one thread at a time: it tracks)."""
 
     def __init__(self, palm_model: Model, landmark_model: Model, min_palm_score: float = 0.5,
-                 min_hand_score: float = 0.5, max_hands: int = 2, mirrored: bool = False):
+                 min_hand_score: float = 0.5, max_hands: int = 2, mirrored: bool = False,
+                 track: bool = True):
         """Use a loaded palm_detection_lite and hand_landmark_lite model."""
         check_shapes(landmark_model, [(1, _SIZE, _SIZE, 3)], ((1, 63), (1, 1), (1, 1)))
         self.palms = PalmDetector(palm_model, min_palm_score, max_palms=max_hands)
         self.landmark_model = landmark_model
         self.min_hand_score = min_hand_score
+        self.max_hands = max_hands
         self.mirrored = mirrored
+        self.track = track
+        self._tracked: List[HandRegion] = []
 
     @classmethod
     def from_files(cls, palm_path: str = '', landmark_path: str = '', threads: int = 1,
@@ -92,24 +148,47 @@ class HandTracker:
         return cls(load(palm_path or shipped_model(PALM_FILE), threads),
                    load(landmark_path or shipped_model(LANDMARK_FILE), threads), **options)
 
+    def forget(self) -> None:
+        """Forget the hands tracked: the next frame is searched with the palm detector."""
+        self._tracked = []
+
     def find(self, image_bgr: np.ndarray) -> List[Hand]:
         """Return the hands in the frame, most certain first."""
-        hands = []
-        for palm in self.palms.detect(image_bgr):
-            region = hand_region(palm)
-            crop = rotated_crop(image_bgr, (region.x, region.y), region.side, region.rotation,
-                                _SIZE, (0.0, 1.0))
-            points, presence, left = self.landmark_model.run(crop.tensor)[:3]
-            score = float(presence.reshape(-1)[0])
-            if score < self.min_hand_score:
-                continue
-            points = points.reshape(21, 3).astype(np.float64)
-            landmarks = np.empty((21, 3), np.float32)
-            landmarks[:, :2] = crop.points_to_image(points[:, :2])
-            landmarks[:, 2] = points[:, 2] * (region.side / _SIZE)
-            # The model's 'Left' is a left hand as a mirror shows it (module docstring).
-            looks_left = float(left.reshape(-1)[0]) > 0.5
-            handedness = 'left' if looks_left == self.mirrored else 'right'
-            hands.append(Hand(landmarks, handedness, score))
-        hands.sort(key=lambda hand: -hand.score)
+        regions = list(self._tracked) if self.track else []
+        if len(regions) < self.max_hands:
+            for palm in self.palms.detect(image_bgr):
+                region = hand_region(palm)
+                if all(_overlap(region, known) <= _SAME_HAND for known in regions):
+                    regions.append(region)
+                if len(regions) >= self.max_hands:
+                    break
+        found = []
+        for region in regions:
+            hand = self._landmarks(image_bgr, region)
+            if hand is not None:
+                found.append((hand, landmark_region(hand.landmarks)))
+        found.sort(key=lambda item: -item[0].score)
+        hands, self._tracked = [], []
+        for hand, region in found:
+            # Two regions that ended on the same hand: the more certain one is kept.
+            if all(_overlap(region, kept) <= _SAME_HAND for kept in self._tracked):
+                hands.append(hand)
+                self._tracked.append(region)
         return hands
+
+    def _landmarks(self, image_bgr: np.ndarray, region: HandRegion) -> Optional[Hand]:
+        """Return the hand in the region, or None when the model sees none there."""
+        crop = rotated_crop(image_bgr, (region.x, region.y), region.side, region.rotation,
+                            _SIZE, (0.0, 1.0))
+        points, presence, left = self.landmark_model.run(crop.tensor)[:3]
+        score = float(presence.reshape(-1)[0])
+        if score < self.min_hand_score:
+            return None
+        points = points.reshape(21, 3).astype(np.float64)
+        landmarks = np.empty((21, 3), np.float32)
+        landmarks[:, :2] = crop.points_to_image(points[:, :2])
+        # z as MediaPipe scales it: like x, then divided by 0.4 (its training data's z spread).
+        landmarks[:, 2] = points[:, 2] * (region.side / _SIZE / _Z_SPREAD)
+        # The model's 'Left' is a left hand as a mirror shows it (module docstring).
+        looks_left = float(left.reshape(-1)[0]) > 0.5
+        return Hand(landmarks, 'left' if looks_left == self.mirrored else 'right', score)

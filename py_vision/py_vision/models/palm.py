@@ -36,7 +36,7 @@ from py_vision.models.anchors import weighted_nms
 from py_vision.models.crops import letterbox
 from py_vision.models.runtime import check_shapes, Model
 
-__all__ = ['hand_region', 'HandRegion', 'Palm', 'PalmDetector']
+__all__ = ['enlarge', 'hand_region', 'HandRegion', 'Palm', 'PalmDetector', 'upright_rotation']
 
 MODEL_FILE = 'palm_detection_lite.tflite'
 _SIZE = 192
@@ -98,16 +98,27 @@ def upright_rotation(start: np.ndarray, end: np.ndarray) -> float:
     return angle - 2 * math.pi * math.floor((angle + math.pi) / (2 * math.pi))
 
 
+def enlarge(x: float, y: float, width: float, height: float, rotation: float, scale: float,
+            shift: float) -> HandRegion:
+    """
+    Return the square around a turned box (centre x, y): MediaPipe's rect transformation.
+
+    The centre moves by `shift` times the box's height along the box's turned vertical
+    (negative: towards its top, where the fingers are); the side is `scale` times the box's
+    longer side.
+    """
+    return HandRegion(x - height * shift * math.sin(rotation),
+                      y + height * shift * math.cos(rotation),
+                      max(width, height) * scale, rotation)
+
+
 def hand_region(palm: Palm, scale: float = 2.6, shift: float = -0.5) -> HandRegion:
     """
     Return the square around the whole hand of a palm.
 
-    The rotation turns the wrist -> middle knuckle direction up; the palm box's centre moves by
-    `shift` times its height along the turned vertical (negative: towards the fingers); the
-    side is `scale` times the box's longer side.
+    Turned so that the wrist -> middle knuckle direction points up, centred half the palm's
+    height towards the fingers, 2.6 times the palm box's longer side.
     """
     x, y, width, height = (float(value) for value in palm.box)
     rotation = upright_rotation(palm.keypoints[_WRIST], palm.keypoints[_MIDDLE_KNUCKLE])
-    cx = x + width / 2 - height * shift * math.sin(rotation)
-    cy = y + height / 2 + height * shift * math.cos(rotation)
-    return HandRegion(cx, cy, max(width, height) * scale, rotation)
+    return enlarge(x + width / 2, y + height / 2, width, height, rotation, scale, shift)

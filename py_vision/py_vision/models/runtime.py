@@ -341,6 +341,7 @@ def load(path: str, threads: int = 1, runtime: str = 'auto') -> Model:
     ('litert', 'tflite_runtime' for .tflite; 'onnxruntime', 'opencv' for .onnx). Raises
     ModelError (RuntimeMissing when the runtime is not installed) with a one-line message.
     """
+    path = os.fspath(path)
     extension = os.path.splitext(path)[1].lower()
     if extension not in RUNTIMES:
         raise ModelError('%s: not a model file py_vision can run (it runs %s)'

@@ -24,11 +24,13 @@ frame is found where the crop's matrix says), and the signs on landmark sets (te
 import math
 
 import cv2
+from hand_poses import FOLDED, place, pose, THUMB_ACROSS
+from hypothesis import given, settings, strategies as st
 import numpy as np
 from photos import photo
 from py_vision.capture.synthetic_picture import synthetic_frame
 from py_vision.models.crops import rotated_crop
-from py_vision.models.hands import HAND_LANDMARKS, HandTracker
+from py_vision.models.hands import HAND_LANDMARKS, HandTracker, landmark_region
 from py_vision.models.palm import hand_region, Palm, upright_rotation
 from py_vision.models.runtime import ModelError
 import pytest
@@ -134,6 +136,70 @@ def test_the_crop_and_its_matrix_agree_on_where_a_marker_is(rotation):
     seen = np.array([xs.mean(), ys.mean()])
     assert seen == pytest.approx([112, 112 - 30 * 224 / 120], abs=1.5)
     assert crop.points_to_image(seen) == pytest.approx(dot, abs=1.0)
+
+
+@settings(deadline=None)  # not timed: the machine may be busy
+@given(roll=st.floats(-180, 180), size=st.floats(20, 300), x=st.floats(0, 640),
+       y=st.floats(0, 480))
+def test_the_region_from_landmarks_is_turned_with_the_hand_and_holds_all_of_it(roll, size, x,
+                                                                               y):
+    for hand in (pose(), pose((FOLDED,) * 4, THUMB_ACROSS)):
+        landmarks = place(hand, roll=roll, size=size, at=(x, y))
+        region = landmark_region(landmarks)
+        # The posed hand's knuckles lean 3 degrees right of its wrist's vertical.
+        turn = math.degrees(math.remainder(region.rotation - math.radians(roll + 3.2),
+                                           2 * math.pi))
+        assert abs(turn) < 1.0, (region.rotation, roll)
+        # Every landmark inside the square, in the square's own (turned) axes.
+        cos, sin = math.cos(region.rotation), math.sin(region.rotation)
+        relative = landmarks[:, :2] - (region.x, region.y)
+        along = np.abs(relative @ np.array([[cos, -sin], [sin, cos]]))
+        assert along.max() < region.side / 2, (roll, size)
+        assert region.side < 5 * size  # and not much more than the hand
+
+
+class Counted:
+    """A model that counts its runs (the tracker's wiring, seen from the models)."""
+
+    def __init__(self, model):
+        self.model, self.runs = model, 0
+        self.path, self.runtime, self.threads = model.path, model.runtime, model.threads
+        self.inputs, self.outputs = model.inputs, model.outputs
+
+    def run(self, *arrays):
+        self.runs += 1
+        return self.model.run(*arrays)
+
+
+def counted_tracker(tracker, **options):
+    palm, landmark = Counted(tracker.palms.model), Counted(tracker.landmark_model)
+    return HandTracker(palm, landmark, **options), palm, landmark
+
+
+def test_a_tracked_hand_skips_the_palm_detector_until_it_is_lost(tracker):
+    # With no thresholds the landmark model's answer on the synthetic frame is "a hand":
+    # the tracker then follows it with one landmark pass per frame.
+    frame = synthetic_frame(0, 640, 480)
+    follows, palm, landmark = counted_tracker(tracker, min_palm_score=0.0, min_hand_score=0.0,
+                                              max_hands=1)
+    assert len(follows.find(frame)) == 1 and (palm.runs, landmark.runs) == (1, 1)
+    assert len(follows.find(frame)) == 1 and (palm.runs, landmark.runs) == (1, 2)
+    follows.forget()
+    assert len(follows.find(frame)) == 1 and (palm.runs, landmark.runs) == (2, 3)
+    # Without tracking, or while fewer hands than max_hands are tracked: the palm detector.
+    fresh, palm, landmark = counted_tracker(tracker, min_palm_score=0.0, min_hand_score=0.0,
+                                            max_hands=1, track=False)
+    fresh.find(frame)
+    fresh.find(frame)
+    assert (palm.runs, landmark.runs) == (2, 2)
+    # A hand that is gone (its presence now below the threshold) is dropped, and the next
+    # frame is searched with the palm detector again.
+    follows, palm, landmark = counted_tracker(tracker, min_palm_score=0.0, min_hand_score=0.0,
+                                              max_hands=1)
+    assert len(follows.find(frame)) == 1 and (palm.runs, landmark.runs) == (1, 1)
+    follows.min_hand_score = 0.5
+    assert follows.find(frame) == [] and (palm.runs, landmark.runs) == (1, 2)
+    assert follows.find(frame) == [] and (palm.runs, landmark.runs) == (2, 3)
 
 
 def test_other_models_are_refused_by_name(tracker):
