@@ -21,13 +21,12 @@ the face where it is, in vision_msgs where installed, else in the JSON fallback.
 """
 
 import json
-from pathlib import Path
 import re
 import signal
 
-import cv2
 from geometry_msgs.msg import Twist
 import numpy as np
+import photos
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_harness import wait_until
 from sensor_msgs.msg import Image
@@ -42,14 +41,6 @@ CAMERA = {'video_device': 'synthetic', 'image_width': 320, 'image_height': 240,
 # with a grid drawn on it: cheek to cheek x 180..265, brow to chin y 75..175; the box's centre
 # and side, in pixels, within TOLERANCE (the detector's box is square and a little larger).
 FACE_CENTER, FACE_SIZE, TOLERANCE = (225.0, 128.0), 95.0, 25.0
-
-
-def astronaut():
-    import skimage
-    path = Path(skimage.__file__).parent / 'data' / 'astronaut.png'
-    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
-    assert image is not None, 'cannot read %s' % path
-    return image
 
 
 def twist_values(msg):
@@ -115,7 +106,7 @@ def test_faces_finds_the_astronauts_face_and_publishes_it_with_the_frames_header
         assert ('vision_msgs is not installed: detections as JSON (std_msgs/String) on '
                 '/detections_json') in line, line
     publisher = peer.node.create_publisher(Image, 'usb_camera/image', RELIABLE)
-    photo = astronaut()
+    photo = photos.photo('astronaut.png')
     msg = Image(height=photo.shape[0], width=photo.shape[1], encoding='bgr8',
                 step=photo.shape[1] * 3, data=photo.tobytes())
     msg.header.frame_id = 'photo'
