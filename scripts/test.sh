@@ -62,6 +62,43 @@ install_tool() {
   || install_tool chromium 'the browser-viewer test' chromium chromium-browser
 install_tool eslint "the lint of the viewer page's script" eslint
 
+# The hand tests' photograph (py_vision/test/photos.py): OpenCV's documentation's handSrc.jpg,
+# an open hand, from Debian's opencv-doc package, which is downloaded (not installed) and only
+# that file taken out, into .venv/test-photos/. Where opencv-doc is installed it is used as it is.
+# Without apt the real-hand tests are skipped, and fail in CI.
+fetch_hand_photo() {
+  local file=usr/share/doc/opencv-doc/opencv4/html/handSrc.jpg dir=$root/.venv/test-photos
+  local log=/tmp/py_vision-apt.log tmp
+  if [ -f "/$file" ]; then
+    export PY_VISION_HAND_PHOTO=/$file
+    return
+  fi
+  export PY_VISION_HAND_PHOTO=$dir/handSrc.jpg
+  [ -s "$PY_VISION_HAND_PHOTO" ] && return
+  if ! command -v apt-get >/dev/null 2>&1 || ! command -v dpkg-deb >/dev/null 2>&1; then
+    echo "[test] no apt-get: the tests on a photograph of a hand will be skipped (in CI: fail)"
+    return
+  fi
+  echo "[test] taking the hand photograph out of Debian's opencv-doc package"
+  tmp=$(mktemp -d)
+  if ! (cd "$tmp" && apt-get download opencv-doc >>$log 2>&1); then
+    [ "$(id -u)" = 0 ] && apt-get update -qq >>$log 2>&1
+    (cd "$tmp" && apt-get download opencv-doc >>$log 2>&1) || true
+  fi
+  mkdir -p "$dir"
+  if ls "$tmp"/opencv-doc_*.deb >/dev/null 2>&1 \
+      && dpkg-deb --fsys-tarfile "$tmp"/opencv-doc_*.deb | tar -x -O "./$file" \
+        >"$PY_VISION_HAND_PHOTO.part" 2>>$log && [ -s "$PY_VISION_HAND_PHOTO.part" ]; then
+    mv "$PY_VISION_HAND_PHOTO.part" "$PY_VISION_HAND_PHOTO"
+  else
+    rm -f "$PY_VISION_HAND_PHOTO.part"
+    echo "[test] could not get opencv-doc (see $log): the tests on a photograph of a hand" \
+      'will be skipped (in CI: fail)'
+  fi
+  rm -rf "$tmp"
+}
+fetch_hand_photo
+
 # The emulated UVC cameras (py_vision/test/uvc_emulator) are a small C library the tests compile
 # with the system C compiler. Install one from the distribution where `cc` is missing (as root,
 # with apt); otherwise say so: those tests are then skipped, and in CI they fail.

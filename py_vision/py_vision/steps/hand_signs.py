@@ -102,8 +102,11 @@ class HandSigns(Step):
     def start(self, context: StepContext) -> Optional[str]:
         """Load the two models; create the hand_sign and Twist publishers."""
         self.settings = dict(context.parameters)
+        # One hand drives the turtle: once it is tracked, the palm detector rests (a tracked
+        # hand costs the landmark model alone, bench/bench_models.py).
         self.tracker = HandTracker.from_files(context.model_path(PALM_FILE),
-                                              context.model_path(LANDMARK_FILE), context.threads)
+                                              context.model_path(LANDMARK_FILE), context.threads,
+                                              max_hands=1)
         self.signs = context.create_publisher(String, 'hand_sign')
         self.twists = context.create_publisher(Twist, self.settings['cmd_vel_topic'])
         return '%s; %s and %s; signs on %s, Twist on %s' % (

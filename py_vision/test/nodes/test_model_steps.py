@@ -16,7 +16,8 @@
 The built-in model steps in the installed vision_step: hand_signs and faces.
 
 hand_signs on the synthetic camera (no hand in it): every Twist all zero and `hand_sign` saying
-so, seen by a subscriber of its own. faces on a real photograph (scikit-image's astronaut):
+so, seen by a subscriber of its own; on a real photograph of an open hand (photos.hand_photo):
+`open_hand`, the turtle told to stand still, the hand drawn. faces on a real photograph (scikit-image's astronaut):
 the face where it is, in vision_msgs where installed, else in the JSON fallback.
 """
 
@@ -68,6 +69,38 @@ def test_hand_signs_on_a_camera_without_hands_stands_still(launch, peer):
     assert 'Traceback' not in node.output()
 
 
+def photo_message(image, frame_id):
+    msg = Image(height=image.shape[0], width=image.shape[1], encoding='bgr8',
+                step=image.shape[1] * 3, data=image.tobytes())
+    msg.header.frame_id = frame_id
+    return msg
+
+
+def test_hand_signs_sees_the_open_hand_in_a_photograph(launch, peer):
+    hand = photos.hand_photo()
+    signs = peer.collect(String, 'hand_sign', RELIABLE)
+    twists = peer.collect(Twist, '/turtle1/cmd_vel', RELIABLE)
+    images = peer.collect(Image, 'vision_step/image', RELIABLE)
+    node = launch('vision_step', params={'step': 'hand_signs'})
+    node.wait_for_output(r'running step hand_signs', timeout=60.0)
+    publisher = peer.node.create_publisher(Image, 'usb_camera/image', RELIABLE)
+    msg = photo_message(hand, 'hand')
+
+    def answered():
+        msg.header.stamp.sec += 1
+        publisher.publish(msg)
+        return signs and images and twists
+    wait_until(answered, 30.0, interval=0.5, what='the sign of the photographed hand')
+    assert signs[0].data == 'open_hand', [s.data for s in list(signs)]
+    assert twist_values(twists[0]) == (0.0,) * 6  # an open hand: stand still
+    # The landmarks are drawn over the hand: many pixels differ from the photograph.
+    drawn = np.frombuffer(bytes(images[0].data), np.uint8).reshape(hand.shape)
+    assert images[0].header.frame_id == 'hand'
+    assert (drawn != hand).any(axis=2).sum() > 2000
+    assert node.stop(signal.SIGINT) == 0
+    assert 'Traceback' not in node.output()
+
+
 def vision_msgs_installed():
     try:
         import vision_msgs.msg  # noqa: F401
@@ -107,9 +140,7 @@ def test_faces_finds_the_astronauts_face_and_publishes_it_with_the_frames_header
                 '/detections_json') in line, line
     publisher = peer.node.create_publisher(Image, 'usb_camera/image', RELIABLE)
     photo = photos.photo('astronaut.png')
-    msg = Image(height=photo.shape[0], width=photo.shape[1], encoding='bgr8',
-                step=photo.shape[1] * 3, data=photo.tobytes())
-    msg.header.frame_id = 'photo'
+    msg = photo_message(photo, 'photo')
 
     def answered():
         msg.header.stamp.sec += 1
