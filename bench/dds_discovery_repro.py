@@ -1,0 +1,376 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+How often a plain rclpy node, started while others start and stop, cannot be reached (issue 34).
+
+  . scripts/board_env.sh && python bench/dds_discovery_repro.py [--starts 200] [--lanes 4]
+      [--within 10] [VARIANT ...]              (Humble, Fast DDS 2.6.0: the boards' versions)
+  .venv/bin/python bench/dds_discovery_repro.py ...          (Jazzy, Fast DDS 2.14, to compare)
+
+No py_vision node runs: each start is this script's own `--node` mode, a bare rclpy node (its
+parameter services, a publisher and a subscription of a small message at 10 Hz) that stops on
+SIGINT or SIGTERM. Lanes run at the same time, as in the stop test
+(py_vision/test/nodes/test_stop_after_parameters.py): each lane has a long-lived peer (an rclpy
+context of this process) and, again and again, starts a node, waits until its peer both sees the
+node's name in the graph and gets an answer from its get_parameters service, then stops it with
+SIGINT or SIGTERM (SIGKILL after 10 s). A start is reached when both happen within --within
+seconds (10). Unreached starts are listed with what the peer's graph held and the node's log
+(what it saw of the graph).
+
+Variants (all with discovery on this host, as the tests run, unless said):
+  default      Fast DDS' defaults in nodes and peers
+  profile      the nodes on py_vision's profile as its nodes tailor it (py_vision.dds), a
+               subscriber's 0.5 MB segment; the peers on defaults, as in the tests
+  no-shm       the profile with its shared-memory transport removed (UDP only), nodes and peers
+  daemon       as default, with the ros2 daemon running on the domain
+  subnet       as default, discovery on the network (no ROS_LOCALHOST_ONLY / discovery range)
+  fixed        the nodes on py_vision's profile as it now is by default on Humble (dds.py)
+Prints a Markdown table, writes bench/results/dds_discovery.json (one entry per variant run).
+"""
+
+import argparse
+import fcntl
+import json
+import os
+from pathlib import Path
+import random
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+BENCH = Path(__file__).resolve().parent
+RESULTS = BENCH / 'results'
+VARIANTS = ('default', 'profile', 'no-shm', 'daemon', 'subnet', 'fixed')
+# Ad-hoc domain ids of this investigation, taken through the tests' own lock files so that a
+# test run never shares one with it.
+DOMAINS = range(170, 200)
+LOCK_DIR = Path(tempfile.gettempdir()) / 'py_vision_test_domains'
+STOP_WITHIN_S = 10.0
+RESEND_AFTER_S = 2.0
+POLL_S = 0.05
+
+
+def run_node(name):
+    """Be the node under test: parameters, a publisher, a subscription; stop on a signal."""
+    import rclpy
+    from std_msgs.msg import String
+
+    rclpy.init()
+    stop = threading.Event()
+    # After rclpy.init(), replacing rclpy's handlers: the loop below polls the flag.
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    node = rclpy.create_node(name)
+    publisher = node.create_publisher(String, 'repro_chatter', 10)
+    node.create_subscription(String, 'repro_chatter', lambda msg: None, 10)
+    seen = {'names': None}
+
+    def tick():
+        publisher.publish(String(data=name))
+        names = sorted(node.get_node_names())
+        if names != seen['names']:
+            seen['names'] = names
+            print('%.2f sees %s' % (time.monotonic(), ' '.join(names)), flush=True)
+    node.create_timer(0.1, tick)
+    print('%.2f up' % time.monotonic(), flush=True)
+    while not stop.is_set():
+        rclpy.spin_once(node, timeout_sec=0.1)
+    node.destroy_node()
+    rclpy.shutdown()
+    print('%.2f stopped' % time.monotonic(), flush=True)
+
+
+class Peer:
+    """A long-lived rclpy context and node of this process, spun by a thread of its own."""
+
+    def __init__(self, domain_id, name):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = rclpy.create_node(name, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self):
+        while self.context.ok():
+            try:
+                self.executor.spin_once(timeout_sec=0.05)
+            except Exception:  # the context was shut down under the executor
+                if self.context.ok():
+                    raise
+                return
+
+    def reach(self, name, within):
+        """Return (seconds until the name was seen or None, until the answer or None, graph)."""
+        from rcl_interfaces.srv import GetParameters
+        client = self.node.create_client(GetParameters, '/%s/get_parameters' % name)
+        start = time.monotonic()
+        seen = answered = future = None
+        sent = 0.0
+        try:
+            while time.monotonic() - start < within and (seen is None or answered is None):
+                now = time.monotonic()
+                if seen is None and name in self.node.get_node_names():
+                    seen = now - start
+                if answered is None:
+                    if future is not None and future.done():
+                        answered = now - start
+                    elif client.service_is_ready() and (future is None
+                                                        or now - sent > RESEND_AFTER_S):
+                        if future is not None:
+                            client.remove_pending_request(future)
+                        future = client.call_async(GetParameters.Request(names=['use_sim_time']))
+                        sent = now
+                time.sleep(POLL_S)
+            graph = None
+            if seen is None or answered is None:
+                service = '/%s/get_parameters' % name
+                graph = {
+                    'service_ready': client.service_is_ready(),
+                    'request_readers': sorted(i.node_name for i in
+                                              self.node.get_subscriptions_info_by_topic(
+                                                  'rq%sRequest' % service, no_mangle=True)),
+                    'reply_writers': sorted(i.node_name for i in
+                                            self.node.get_publishers_info_by_topic(
+                                                'rr%sReply' % service, no_mangle=True)),
+                    'nodes': sorted(self.node.get_node_names()),
+                }
+            return seen, answered, graph
+        finally:
+            self.node.destroy_client(client)
+
+    def close(self):
+        import rclpy
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)
+        self._thread.join(2.0)
+
+
+def take_domain():
+    """Return (domain id, lock handle) of a free id in DOMAINS."""
+    LOCK_DIR.mkdir(exist_ok=True)
+    for candidate in DOMAINS:
+        handle = open(LOCK_DIR / ('%d.lock' % candidate), 'w')
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            handle.close()
+            continue
+        return candidate, handle
+    raise RuntimeError('no free ROS_DOMAIN_ID in %d-%d' % (DOMAINS[0], DOMAINS[-1]))
+
+
+def on_humble():
+    import rclpy
+    return not hasattr(rclpy, 'parameter_client')
+
+
+def profile_file(workdir, variant):
+    """Write and return the profile file the nodes of a variant get (None: Fast DDS defaults)."""
+    sys.path.insert(0, str(BENCH))
+    import bench_common  # noqa: F401 (puts the installed py_vision on sys.path)
+    from py_vision import dds
+    if variant == 'fixed':
+        env = {'ROS_LOCALHOST_ONLY': '1'} if on_humble() else {
+            'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}
+        path = dds.use_packaged_profile(dds.NO_IMAGES, [], 'repro', environ=env)
+        return path
+    path = dds.tailor(dds.packaged_profile(), dds.SMALL_SEGMENT, localhost=True)
+    if variant == 'no-shm':
+        text = Path(path).read_text()
+        start = text.index('<transport_descriptor>')
+        end = text.index('</transport_descriptor>', start) + len('</transport_descriptor>')
+        text = text[:start] + text[end:]
+        text = text.replace('<transport_id>py_vision_shm</transport_id>', '', 1)
+        path = str(Path(workdir) / 'no_shm.xml')
+        Path(path).write_text(text)
+    return path
+
+
+def variant_env(variant, domain_id, workdir):
+    """Return (the nodes' environment, the peers' environment) of a variant."""
+    env = dict(os.environ)
+    for name in ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE',
+                 'RMW_IMPLEMENTATION', 'ROS_LOCALHOST_ONLY', 'ROS_AUTOMATIC_DISCOVERY_RANGE',
+                 'ROS_STATIC_PEERS'):
+        env.pop(name, None)
+    env.update(ROS_DOMAIN_ID=str(domain_id), PYTHONUNBUFFERED='1')
+    if variant != 'subnet':
+        if on_humble():
+            env['ROS_LOCALHOST_ONLY'] = '1'
+        else:
+            env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    nodes, peers = dict(env), dict(env)
+    if variant in ('profile', 'no-shm', 'fixed'):
+        nodes['FASTRTPS_DEFAULT_PROFILES_FILE'] = profile_file(workdir, variant)
+    if variant == 'no-shm':
+        peers['FASTRTPS_DEFAULT_PROFILES_FILE'] = nodes['FASTRTPS_DEFAULT_PROFILES_FILE']
+    return nodes, peers
+
+
+def fast_dds_segments():
+    """Return the number of Fast DDS files in /dev/shm."""
+    try:
+        return sum(1 for entry in os.listdir('/dev/shm')
+                   if entry.startswith(('fastrtps', 'sem.fastrtps')))
+    except OSError:
+        return None
+
+
+def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir):
+    """Start, reach and stop `starts` nodes one after the other; append a record for each."""
+    peer = Peer(domain_id, 'repro_peer_%d' % lane)
+    try:
+        for number in range(starts):
+            name = 'repro_%d_%d' % (lane, number)
+            log_path = Path(workdir) / ('%s.log' % name)
+            with open(log_path, 'w') as log:
+                proc = subprocess.Popen(
+                    [sys.executable, __file__, '--node', name], env=nodes_env, stdout=log,
+                    stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
+            try:
+                seen, answered, graph = peer.reach(name, within)
+            finally:
+                sig = rng.choice([signal.SIGINT, signal.SIGTERM])
+                proc.send_signal(sig)
+                try:
+                    status = proc.wait(STOP_WITHIN_S)
+                except subprocess.TimeoutExpired:
+                    os.killpg(proc.pid, signal.SIGKILL)
+                    status = proc.wait()
+            record = {'lane': lane, 'number': number, 'name_s': seen, 'answer_s': answered,
+                      'reached': seen is not None and answered is not None, 'status': status}
+            if not record['reached']:
+                record['graph'] = graph
+                record['log'] = log_path.read_text(errors='replace').splitlines()[-15:]
+                print('  unreached %s: %s' % (name, json.dumps(graph)), flush=True)
+            else:
+                log_path.unlink()
+            results.append(record)
+    finally:
+        peer.close()
+
+
+def measure(variant, total, lanes, within):
+    """Run one variant: `total` starts over `lanes` lanes; return its summary dict."""
+    domain_id, lock = take_domain()
+    workdir = tempfile.mkdtemp(prefix='dds_repro_')
+    daemon = None
+    try:
+        nodes_env, peers_env = variant_env(variant, domain_id, workdir)
+        for name in ('ROS_LOCALHOST_ONLY', 'ROS_AUTOMATIC_DISCOVERY_RANGE',
+                     'FASTRTPS_DEFAULT_PROFILES_FILE'):
+            os.environ.pop(name, None)
+            if name in peers_env:
+                os.environ[name] = peers_env[name]
+        if variant == 'daemon':
+            subprocess.run(['ros2', 'daemon', 'stop'], env=nodes_env, capture_output=True)
+            subprocess.run(['ros2', 'daemon', 'start'], env=nodes_env, capture_output=True,
+                           check=True, timeout=60)
+            daemon = nodes_env
+        before = fast_dds_segments()
+        results = []
+        started = time.monotonic()
+        per_lane = [total // lanes + (1 if lane < total % lanes else 0) for lane in range(lanes)]
+        threads = [threading.Thread(target=run_lane, args=(
+            lane, per_lane[lane], within, nodes_env, domain_id,
+            random.Random('%s %d' % (variant, lane)), results, workdir))
+            for lane in range(lanes)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        reached = [r for r in results if r['reached']]
+        answers = sorted(r['answer_s'] for r in reached)
+        return {
+            'variant': variant, 'starts': len(results), 'reached': len(reached),
+            'unreached': [r for r in results if not r['reached']],
+            'answer_median_s': round(answers[len(answers) // 2], 2) if answers else None,
+            'answer_max_s': round(answers[-1], 2) if answers else None,
+            'not_stopped_cleanly': sum(1 for r in results if r['status'] != 0),
+            'shm_files_before': before, 'shm_files_after': fast_dds_segments(),
+            'seconds': round(time.monotonic() - started, 1), 'lanes': lanes, 'within_s': within,
+            'domain_id': domain_id,
+        }
+    finally:
+        if daemon is not None:
+            subprocess.run(['ros2', 'daemon', 'stop'], env=daemon, capture_output=True)
+        lock.close()
+
+
+def versions():
+    """Return the ROS distribution's rclpy version and the Fast DDS library in use."""
+    import rclpy
+    found = {'python': '%d.%d' % sys.version_info[:2], 'humble': on_humble()}
+    try:
+        with open('/proc/self/maps') as maps:
+            libs = {line.split()[-1] for line in maps if 'libfastrtps.so' in line}
+        found['fastdds'] = sorted(os.path.realpath(lib).rsplit('.so.', 1)[-1] for lib in libs)
+    except OSError:
+        pass
+    found['rclpy'] = os.path.dirname(rclpy.__file__)
+    return found
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('variants', nargs='*', default=['default'],
+                        help='any of %s (default)' % ', '.join(VARIANTS))
+    parser.add_argument('--starts', type=int, default=200, help='node starts per variant')
+    parser.add_argument('--lanes', type=int, default=4, help='lanes at the same time (4)')
+    parser.add_argument('--within', type=float, default=10.0, help='seconds to reach a node')
+    parser.add_argument('--node', help=argparse.SUPPRESS)
+    args, _ = parser.parse_known_args(argv)
+    if args.node:
+        run_node(args.node)
+        return 0
+    unknown = [v for v in args.variants if v not in VARIANTS]
+    if unknown:
+        parser.error('unknown variant(s) %s: choose from %s' % (
+            ', '.join(unknown), ', '.join(VARIANTS)))
+    runs = []
+    for variant in args.variants:
+        print('%s: %d starts in %d lanes' % (variant, args.starts, args.lanes), flush=True)
+        runs.append(measure(variant, args.starts, args.lanes, args.within))
+    found = versions()
+    print()
+    print('| variant | Fast DDS | reached within %gs | median / max answer (s) | time (s) |'
+          % args.within)
+    print('|---|---|---|---|---|')
+    for run in runs:
+        print('| %s | %s | %d of %d | %s / %s | %.0f |' % (
+            run['variant'], ','.join(found.get('fastdds', [])), run['reached'], run['starts'],
+            run['answer_median_s'], run['answer_max_s'], run['seconds']))
+    RESULTS.mkdir(exist_ok=True)
+    out = RESULTS / 'dds_discovery.json'
+    try:
+        previous = json.loads(out.read_text())
+    except (OSError, ValueError):
+        previous = []
+    for run in runs:
+        run.update(versions=found, when=time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()))
+    out.write_text(json.dumps(previous + runs, indent=1))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
