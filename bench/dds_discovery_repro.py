@@ -53,7 +53,8 @@ import tempfile
 import threading
 import time
 
-BENCH = Path(__file__).resolve().parent
+SCRIPT = Path(__file__).resolve()
+BENCH = SCRIPT.parent
 RESULTS = BENCH / 'results'
 VARIANTS = ('default', 'profile', 'no-shm', 'daemon', 'subnet', 'fixed')
 # Ad-hoc domain ids of this investigation, taken through the tests' own lock files so that a
@@ -63,6 +64,21 @@ LOCK_DIR = Path(tempfile.gettempdir()) / 'py_vision_test_domains'
 STOP_WITHIN_S = 10.0
 RESEND_AFTER_S = 2.0
 POLL_S = 0.05
+# Fast DDS warnings every node prints as it stops, left out of an unreached node's log.
+SHUTDOWN_NOISE = ('Error receiving data', 'remove_local_writer', 'Automatically unmatching',
+                  'NO readers are listening')
+
+
+def fast_dds_warnings():
+    """Make Fast DDS print its warnings (it prints only errors unless told; rcl never tells it)."""
+    import ctypes
+    try:
+        with open('/proc/self/maps') as maps:
+            lib = next(line.split()[-1] for line in maps if 'libfastrtps.so' in line)
+        # eprosima::fastdds::dds::Log::SetVerbosity(Log::Kind), a static function; Warning = 1.
+        getattr(ctypes.CDLL(lib), '_ZN8eprosima7fastdds3dds3Log12SetVerbosityENS2_4KindE')(1)
+    except (OSError, StopIteration, AttributeError) as error:
+        print('Fast DDS warnings stay off: %s' % error, flush=True)
 
 
 def run_node(name):
@@ -71,6 +87,7 @@ def run_node(name):
     from std_msgs.msg import String
 
     rclpy.init()
+    fast_dds_warnings()
     stop = threading.Event()
     # After rclpy.init(), replacing rclpy's handlers: the loop below polls the flag.
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -236,19 +253,66 @@ def fast_dds_segments():
         return None
 
 
+def udp_ports(pid):
+    """Return the local UDP ports a process has sockets on."""
+    inodes = set()
+    try:
+        for fd in os.listdir('/proc/%d/fd' % pid):
+            try:
+                target = os.readlink('/proc/%d/fd/%s' % (pid, fd))
+            except OSError:
+                continue
+            if target.startswith('socket:['):
+                inodes.add(target[8:-1])
+        with open('/proc/%d/net/udp' % pid) as table:
+            rows = [line.split() for line in table.readlines()[1:]]
+    except OSError:
+        return []
+    return sorted({int(row[1].split(':')[1], 16) for row in rows if row[9] in inodes})
+
+
+def shm_ports(pid=None):
+    """
+    Return the Fast DDS shared-memory ports in /dev/shm, or those a process maps.
+
+    A port a process maps after it was removed from /dev/shm (another process reset it) is
+    given as '<port> deleted': what the process writes there nobody reads.
+    """
+    try:
+        if pid is None:
+            names = os.listdir('/dev/shm')
+        else:
+            with open('/proc/%d/maps' % pid) as maps:
+                names = {line.split('/dev/shm/', 1)[1].strip()
+                         for line in maps if '/dev/shm/fastrtps_port' in line}
+    except OSError:
+        return []
+    ports = set()
+    for name in names:
+        number, _, deleted = name[len('fastrtps_port'):].partition(' ')
+        if name.startswith('fastrtps_port') and number.isdigit():
+            ports.add('%s deleted' % number if deleted else number)
+    return sorted(ports, key=lambda port: int(port.split()[0]))
+
+
 def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir):
     """Start, reach and stop `starts` nodes one after the other; append a record for each."""
     peer = Peer(domain_id, 'repro_peer_%d' % lane)
+    fast_dds_warnings()
     try:
         for number in range(starts):
             name = 'repro_%d_%d' % (lane, number)
             log_path = Path(workdir) / ('%s.log' % name)
             with open(log_path, 'w') as log:
                 proc = subprocess.Popen(
-                    [sys.executable, __file__, '--node', name], env=nodes_env, stdout=log,
+                    [sys.executable, str(SCRIPT), '--node', name], env=nodes_env, stdout=log,
                     stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
             try:
                 seen, answered, graph = peer.reach(name, within)
+                if graph is not None:
+                    graph.update(node_udp=udp_ports(proc.pid), node_shm=shm_ports(proc.pid),
+                                 peers_udp=udp_ports(os.getpid()),
+                                 peers_shm=shm_ports(os.getpid()), dev_shm=shm_ports())
             finally:
                 sig = rng.choice([signal.SIGINT, signal.SIGTERM])
                 proc.send_signal(sig)
@@ -261,7 +325,8 @@ def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir):
                       'reached': seen is not None and answered is not None, 'status': status}
             if not record['reached']:
                 record['graph'] = graph
-                record['log'] = log_path.read_text(errors='replace').splitlines()[-15:]
+                record['log'] = [line for line in log_path.read_text(errors='replace').splitlines()
+                                 if not any(noise in line for noise in SHUTDOWN_NOISE)][-40:]
                 print('  unreached %s: %s' % (name, json.dumps(graph)), flush=True)
             else:
                 log_path.unlink()
