@@ -36,7 +36,9 @@ Variants (all with discovery on this host, as the tests run, unless said):
   no-shm       the profile with its shared-memory transport removed (UDP only), nodes and peers
   daemon       as default, with the ros2 daemon running on the domain
   subnet       as default, discovery on the network (no ROS_LOCALHOST_ONLY / discovery range)
-  fixed        the nodes on py_vision's profile as it now is by default on Humble (dds.py)
+  fixed        the nodes on the profile py_vision gives a node that receives no images
+               (py_vision.dds, as usbcam_publisher): on Humble it listens on UDP alone, so
+               receives nothing through shared memory (it still sends through it)
 Prints a Markdown table, writes bench/results/dds_discovery.json (one entry per variant run).
 """
 
@@ -209,8 +211,8 @@ def profile_file(workdir, variant):
     if variant == 'fixed':
         env = {'ROS_LOCALHOST_ONLY': '1'} if on_humble() else {
             'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}
-        path = dds.use_packaged_profile(dds.NO_IMAGES, [], 'repro', environ=env)
-        return path
+        return dds.use_packaged_profile(dds.NO_IMAGES, [], 'repro', environ=env,
+                                        receives_images=False)
     path = dds.tailor(dds.packaged_profile(), dds.SMALL_SEGMENT, localhost=True)
     if variant == 'no-shm':
         text = Path(path).read_text()
@@ -298,7 +300,6 @@ def shm_ports(pid=None):
 def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir):
     """Start, reach and stop `starts` nodes one after the other; append a record for each."""
     peer = Peer(domain_id, 'repro_peer_%d' % lane)
-    fast_dds_warnings()
     try:
         for number in range(starts):
             name = 'repro_%d_%d' % (lane, number)
@@ -396,6 +397,17 @@ def versions():
     return found
 
 
+def save(run):
+    """Append one variant's run to bench/results/dds_discovery.json."""
+    RESULTS.mkdir(exist_ok=True)
+    out = RESULTS / 'dds_discovery.json'
+    try:
+        previous = json.loads(out.read_text())
+    except (OSError, ValueError):
+        previous = []
+    out.write_text(json.dumps(previous + [run], indent=1))
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('variants', nargs='*', default=['default'],
@@ -415,8 +427,11 @@ def main(argv=None):
     runs = []
     for variant in args.variants:
         print('%s: %d starts in %d lanes' % (variant, args.starts, args.lanes), flush=True)
-        runs.append(measure(variant, args.starts, args.lanes, args.within))
-    found = versions()
+        run = measure(variant, args.starts, args.lanes, args.within)
+        found = versions()  # Fast DDS is loaded once a context has been initialised
+        run.update(versions=found, when=time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()))
+        save(run)  # each variant as soon as it is measured
+        runs.append(run)
     print()
     print('| variant | Fast DDS | reached within %gs | median / max answer (s) | time (s) |'
           % args.within)
@@ -425,15 +440,6 @@ def main(argv=None):
         print('| %s | %s | %d of %d | %s / %s | %.0f |' % (
             run['variant'], ','.join(found.get('fastdds', [])), run['reached'], run['starts'],
             run['answer_median_s'], run['answer_max_s'], run['seconds']))
-    RESULTS.mkdir(exist_ok=True)
-    out = RESULTS / 'dds_discovery.json'
-    try:
-        previous = json.loads(out.read_text())
-    except (OSError, ValueError):
-        previous = []
-    for run in runs:
-        run.update(versions=found, when=time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()))
-    out.write_text(json.dumps(previous + runs, indent=1))
     return 0
 
 

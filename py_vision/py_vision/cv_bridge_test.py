@@ -107,6 +107,7 @@ class CvBridgeTest(Node):
     NODE_NAME = 'cv_bridge_test'
     COMMANDS = {}
     PUBLISHES = dds.INPUT_SIZE
+    RECEIVES_IMAGES = True
     SUMMARY = ('Draws a red circle on every frame of usb_camera/image and publishes it on '
                'cv_bridge_image, always working on the newest frame.')
     PARAMETERS = viewer_specs('none', DISPLAYS) + (

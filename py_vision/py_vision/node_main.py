@@ -67,7 +67,8 @@ class NodeProgram(Protocol):
 
     The class says what --help prints (NODE_NAME, PARAMETERS, SUMMARY), what it publishes
     before rclpy starts (PUBLISHES: dds.NO_IMAGES, OWN_SIZE or INPUT_SIZE, which sizes its
-    shared memory) and its own commands (COMMANDS: a flag such as '--list-formats' -> a function
+    shared memory; RECEIVES_IMAGES: whether it subscribes to images, without which it listens on
+    UDP alone on Fast DDS 2.6) and its own commands (COMMANDS: a flag such as '--list-formats' -> a function
     of the command line returning the exit status, run instead of the node). Built with no
     arguments, the node raises ConfigError for anything the user has to fix; close() releases
     what it holds (threads, devices, sockets) and copes with a half-built node; `failed` is set
@@ -78,6 +79,7 @@ class NodeProgram(Protocol):
     PARAMETERS: ClassVar[Sequence[Spec]]
     SUMMARY: ClassVar[str]
     PUBLISHES: ClassVar[str]
+    RECEIVES_IMAGES: ClassVar[bool]
     COMMANDS: ClassVar[Dict[str, Callable[[List[str]], int]]]
     failed: bool
 
@@ -251,7 +253,8 @@ def run(node_class: Type[NodeProgram], args=None) -> int:
     # service or a timer is being created can deadlock), and what was built is closed.
     install_quiet_signals()
     # The shared-memory segment is sized to what the node publishes, before parameters exist.
-    dds.use_packaged_profile(node_class.PUBLISHES, argv, node_class.NODE_NAME)
+    dds.use_packaged_profile(node_class.PUBLISHES, argv, node_class.NODE_NAME,
+                             receives_images=node_class.RECEIVES_IMAGES)
     # rclpy gets the parameters in py_vision's order (ros_arguments), whatever its own.
     with ros_arguments.rclpy_arguments(argv, node_class.NODE_NAME) as rclpy_argv:
         error = _init_rclpy(rclpy_argv)
