@@ -67,12 +67,12 @@ class NodeProgram(Protocol):
 
     The class says what --help prints (NODE_NAME, PARAMETERS, SUMMARY), what it publishes
     before rclpy starts (PUBLISHES: dds.NO_IMAGES, OWN_SIZE or INPUT_SIZE, which sizes its
-    shared memory; RECEIVES_IMAGES: whether it subscribes to images, without which it listens on
-    UDP alone on Fast DDS 2.6) and its own commands (COMMANDS: a flag such as '--list-formats' -> a function
-    of the command line returning the exit status, run instead of the node). Built with no
-    arguments, the node raises ConfigError for anything the user has to fix; close() releases
-    what it holds (threads, devices, sockets) and copes with a half-built node; `failed` is set
-    when it stops because of an error (the exit status is then 1).
+    shared memory), whether it subscribes to images (RECEIVES_IMAGES: without, it listens on
+    UDP alone on Fast DDS 2.6) and its own commands (COMMANDS: a flag such as '--list-formats'
+    -> a function of the command line returning the exit status, run instead of the node).
+    Built with no arguments, the node raises ConfigError for anything the user has to fix;
+    close() releases what it holds (threads, devices, sockets) and copes with a half-built node;
+    `failed` is set when it stops because of an error (the exit status is then 1).
     """
 
     NODE_NAME: ClassVar[str]
