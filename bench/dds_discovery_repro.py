@@ -307,49 +307,52 @@ def shm_ports(pid=None):
     return sorted(ports, key=lambda port: int(port.split()[0]))
 
 
-def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir):
-    """Start, reach and stop `starts` nodes one after the other; append a record for each."""
+def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir, peers):
+    """
+    Start, reach and stop `starts` nodes one after the other; append a record for each.
+
+    The lane's peer is appended to peers, for the caller to close once the results are saved:
+    Fast DDS 2.6.0 crashed now and then as a peer with many clients was destroyed.
+    """
     peer = Peer(domain_id, 'repro_peer_%d' % lane)
-    try:
-        for number in range(starts):
-            name = 'repro_%d_%d' % (lane, number)
-            log_path = Path(workdir) / ('%s.log' % name)
-            with open(log_path, 'w') as log:
-                proc = subprocess.Popen(
-                    [sys.executable, str(SCRIPT), '--node', name], env=nodes_env, stdout=log,
-                    stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
+    peers.append(peer)
+    for number in range(starts):
+        name = 'repro_%d_%d' % (lane, number)
+        log_path = Path(workdir) / ('%s.log' % name)
+        with open(log_path, 'w') as log:
+            proc = subprocess.Popen(
+                [sys.executable, str(SCRIPT), '--node', name], env=nodes_env, stdout=log,
+                stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
+        try:
+            seen, answered, graph = peer.reach(name, within)
+            if graph is not None:
+                graph.update(node_udp=udp_ports(proc.pid), node_shm=shm_ports(proc.pid),
+                             peers_udp=udp_ports(os.getpid()),
+                             peers_shm=shm_ports(os.getpid()), dev_shm=shm_ports())
+        finally:
+            sig = rng.choice([signal.SIGINT, signal.SIGTERM])
+            proc.send_signal(sig)
             try:
-                seen, answered, graph = peer.reach(name, within)
-                if graph is not None:
-                    graph.update(node_udp=udp_ports(proc.pid), node_shm=shm_ports(proc.pid),
-                                 peers_udp=udp_ports(os.getpid()),
-                                 peers_shm=shm_ports(os.getpid()), dev_shm=shm_ports())
-            finally:
-                sig = rng.choice([signal.SIGINT, signal.SIGTERM])
-                proc.send_signal(sig)
-                try:
-                    status = proc.wait(STOP_WITHIN_S)
-                except subprocess.TimeoutExpired:
-                    os.killpg(proc.pid, signal.SIGKILL)
-                    status = proc.wait()
-            record = {'lane': lane, 'number': number, 'name_s': seen, 'answer_s': answered,
-                      'reached': seen is not None and answered is not None, 'status': status}
-            if not record['reached']:
-                record['graph'] = graph
-                record['log'] = [line for line in log_path.read_text(errors='replace').splitlines()
-                                 if not any(noise in line for noise in SHUTDOWN_NOISE)][-40:]
-                print('  unreached %s: %s' % (name, json.dumps(graph)), flush=True)
-            else:
-                log_path.unlink()
-            results.append(record)
-            if len(results) % 50 == 0:
-                print('  %d starts, %d reached' % (
-                    len(results), sum(1 for r in results if r['reached'])), flush=True)
-    finally:
-        peer.close()
+                status = proc.wait(STOP_WITHIN_S)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                status = proc.wait()
+        record = {'lane': lane, 'number': number, 'name_s': seen, 'answer_s': answered,
+                  'reached': seen is not None and answered is not None, 'status': status}
+        if not record['reached']:
+            record['graph'] = graph
+            record['log'] = [line for line in log_path.read_text(errors='replace').splitlines()
+                             if not any(noise in line for noise in SHUTDOWN_NOISE)][-40:]
+            print('  unreached %s: %s' % (name, json.dumps(graph)), flush=True)
+        else:
+            log_path.unlink()
+        results.append(record)
+        if len(results) % 50 == 0:
+            print('  %d starts, %d reached' % (
+                len(results), sum(1 for r in results if r['reached'])), flush=True)
 
 
-def measure(variant, total, lanes, within):
+def measure(variant, total, lanes, within, peers):
     """Run one variant: `total` starts over `lanes` lanes; return its summary dict."""
     domain_id, lock = take_domain()
     workdir = tempfile.mkdtemp(prefix='dds_repro_')
@@ -372,7 +375,7 @@ def measure(variant, total, lanes, within):
         per_lane = [total // lanes + (1 if lane < total % lanes else 0) for lane in range(lanes)]
         threads = [threading.Thread(target=run_lane, args=(
             lane, per_lane[lane], within, nodes_env, domain_id,
-            random.Random('%s %d' % (variant, lane)), results, workdir))
+            random.Random('%s %d' % (variant, lane)), results, workdir, peers))
             for lane in range(lanes)]
         for thread in threads:
             thread.start()
@@ -440,11 +443,14 @@ def main(argv=None):
     runs = []
     for variant in args.variants:
         print('%s: %d starts in %d lanes' % (variant, args.starts, args.lanes), flush=True)
-        run = measure(variant, args.starts, args.lanes, args.within)
+        peers = []
+        run = measure(variant, args.starts, args.lanes, args.within, peers)
         found = versions()  # Fast DDS is loaded once a context has been initialised
         run.update(versions=found, when=time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()))
-        save(run)  # each variant as soon as it is measured
+        save(run)  # each variant as soon as it is measured, before its peers are closed
         runs.append(run)
+        for peer in peers:
+            peer.close()
     print()
     print('| variant | Fast DDS | reached within %gs | median / max answer (s) | time (s) |'
           % args.within)
