@@ -31,6 +31,10 @@ temporary directory and named after its content, tailored to the node:
 - Socket buffers no larger than the kernel allows (net.core.wmem_max / rmem_max): Fast DDS
   drops its whole UDP transport, silently, when a buffer above the limit is requested, and
   with it every peer on another host.
+- On Fast DDS 2.6 (Humble, the boards), a node that receives no images receives nothing
+  through shared memory (UDP locators only; it still sends its images through it): Fast DDS
+  2.6.0 to 2.6.5 can stop reading a shared-memory port for good, and the node would go
+  unheard (docs/boards.md, "A node nobody hears"). PY_VISION_SHM_RECEIVE=1 turns this off.
 """
 
 import os
@@ -69,6 +73,14 @@ DEFAULT_SIZE = (640, 480)  # usbcam_publisher's image_width, image_height defaul
 CAMERA_NODE = 'usbcam_publisher'
 SAFE_SIZE = (1920, 1080)
 BYTES_PER_PIXEL = 3
+
+# Fast DDS 2.6.0 to 2.6.5 stop reading a shared-memory port for good when the message at its
+# head came from a process that has since removed its segment (fixed in 2.6.6). Humble's
+# rmw_fastrtps (6) runs on 2.6: there a node that receives no images listens on UDP only.
+SHM_RECEIVE_SETTING = 'PY_VISION_SHM_RECEIVE'
+# Fast DDS' discovery multicast group (its ports are Fast DDS' own: 0 means computed).
+DISCOVERY_MULTICAST = '239.255.0.1'
+_RMW_PACKAGE = 'rmw_fastrtps_shared_cpp'
 
 
 def packaged_profile():
@@ -135,13 +147,15 @@ def _kernel_limit(path):
         return None
 
 
-def tailor(profile, segment=None, localhost=False, limits=None):
+def tailor(profile, segment=None, localhost=False, limits=None, udp_receive=False):
     """
     Return the path of a copy of profile tailored to one node, or profile itself if unchanged.
 
     segment: the shared-memory segment size in bytes (None: as in profile); localhost: restrict
     UDP to 127.0.0.1; limits: the kernel's socket buffer limits by element name (by default
-    read from /proc/sys/net/core), to which the buffer sizes are capped.
+    read from /proc/sys/net/core), to which the buffer sizes are capped; udp_receive: the
+    participant listens on UDP locators only (discovery and data), none of shared memory, which
+    it still sends through.
     """
     if limits is None:
         limits = {tag: _kernel_limit(path) for tag, path in _KERNEL_LIMITS.items()}
@@ -169,6 +183,9 @@ def tailor(profile, segment=None, localhost=False, limits=None):
             # Fast DDS' schema wants it right after <type>.
             descriptor.insert(list(descriptor).index(descriptor.find(q % 'type')) + 1, allowed)
             changed = True
+    if udp_receive:
+        _receive_over_udp(tree.getroot(), q)
+        changed = True
     if not changed:
         return profile
     fitted = '<?xml version="1.0" encoding="UTF-8"?>\n%s\n' % ET.tostring(
@@ -189,6 +206,39 @@ def tailor(profile, segment=None, localhost=False, limits=None):
     return path
 
 
+def _receive_over_udp(root, q):
+    """Give the default participant profile UDPv4 locators to listen on, and so none of SHM."""
+    rtps = root.find('%s/%s' % (q % 'participant', q % 'rtps'))
+
+    def udp_list(parent, name, address=None):
+        locator = ET.SubElement(ET.SubElement(parent, q % name), q % 'locator')
+        udp = ET.SubElement(locator, q % 'udpv4')
+        if address is not None:
+            ET.SubElement(udp, q % 'address').text = address
+    # No address, no port: every allowed interface, the participant's well-known ports.
+    udp_list(rtps, 'defaultUnicastLocatorList')
+    builtin = ET.SubElement(rtps, q % 'builtin')
+    udp_list(builtin, 'metatrafficUnicastLocatorList')
+    udp_list(builtin, 'metatrafficMulticastLocatorList', DISCOVERY_MULTICAST)
+
+
+def shm_receive_breaks(environ=os.environ):
+    """
+    Return True where Fast DDS is 2.6 (rmw_fastrtps 6, Humble) and the user did not opt out.
+
+    Which 2.6 patch release runs cannot be told before it is loaded: every 2.6 counts (2.6.0,
+    the boards', to 2.6.5 have the defect).
+    """
+    if environ.get(SHM_RECEIVE_SETTING) == '1':
+        return False
+    try:
+        with open(os.path.join(get_package_share_directory(_RMW_PACKAGE), 'package.xml')) as xml:
+            version = ET.parse(xml).getroot().findtext('version', '')
+    except (PackageNotFoundError, OSError, ET.ParseError):
+        return False
+    return version.split('.')[0] == '6'
+
+
 def _holds(path, text):
     """Return True if path is this user's file and holds text."""
     try:
@@ -200,12 +250,15 @@ def _holds(path, text):
         return False
 
 
-def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.environ):
+def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.environ,
+                         receives_images=True):
     """
     Point Fast DDS at the packaged profile tailored to a node; return its path, or None.
 
     publishes: NO_IMAGES, OWN_SIZE or INPUT_SIZE (None: large images, SAFE_SIZE); args: the
-    node's command line (default sys.argv), where OWN_SIZE and INPUT_SIZE read the frame size.
+    node's command line (default sys.argv), where OWN_SIZE and INPUT_SIZE read the frame size;
+    receives_images: False for a node that subscribes to no images, which on Fast DDS 2.6 then
+    receives nothing through shared memory (shm_receive_breaks).
     Left alone (None): another RMW is selected, the user set a profile file, or Fast DDS would
     load DEFAULT_FASTRTPS_PROFILES.xml from the working directory.
     """
@@ -218,7 +271,8 @@ def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.env
     path = packaged_profile()
     if path is not None:
         segment = segment_size(publishes, sys.argv if args is None else args, node_name)
-        path = tailor(path, segment, localhost_only(environ))
+        path = tailor(path, segment, localhost_only(environ),
+                      udp_receive=not receives_images and shm_receive_breaks(environ))
         environ[USER_SETTING] = path
         _chosen['segment'] = segment
     return path

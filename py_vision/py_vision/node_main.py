@@ -68,17 +68,19 @@ class NodeProgram(Protocol):
     The class says what --help prints (NODE_NAME, PARAMETERS, SUMMARY; a classmethod
     help_parameters(argv), where it has one, lists them instead), what it publishes
     before rclpy starts (PUBLISHES: dds.NO_IMAGES, OWN_SIZE or INPUT_SIZE, which sizes its
-    shared memory) and its own commands (COMMANDS: a flag such as '--list-formats' -> a function
-    of the command line returning the exit status, run instead of the node). Built with no
-    arguments, the node raises ConfigError for anything the user has to fix; close() releases
-    what it holds (threads, devices, sockets) and copes with a half-built node; `failed` is set
-    when it stops because of an error (the exit status is then 1).
+    shared memory), whether it subscribes to images (RECEIVES_IMAGES: without, it listens on
+    UDP alone on Fast DDS 2.6) and its own commands (COMMANDS: a flag such as '--list-formats'
+    -> a function of the command line returning the exit status, run instead of the node).
+    Built with no arguments, the node raises ConfigError for anything the user has to fix;
+    close() releases what it holds (threads, devices, sockets) and copes with a half-built node;
+    `failed` is set when it stops because of an error (the exit status is then 1).
     """
 
     NODE_NAME: ClassVar[str]
     PARAMETERS: ClassVar[Sequence[Spec]]
     SUMMARY: ClassVar[str]
     PUBLISHES: ClassVar[str]
+    RECEIVES_IMAGES: ClassVar[bool]
     COMMANDS: ClassVar[Dict[str, Callable[[List[str]], int]]]
     failed: bool
 
@@ -259,7 +261,8 @@ def run(node_class: Type[NodeProgram], args=None) -> int:
     # service or a timer is being created can deadlock), and what was built is closed.
     install_quiet_signals()
     # The shared-memory segment is sized to what the node publishes, before parameters exist.
-    dds.use_packaged_profile(node_class.PUBLISHES, argv, node_class.NODE_NAME)
+    dds.use_packaged_profile(node_class.PUBLISHES, argv, node_class.NODE_NAME,
+                             receives_images=node_class.RECEIVES_IMAGES)
     # rclpy gets the parameters in py_vision's order (ros_arguments), whatever its own.
     with ros_arguments.rclpy_arguments(argv, node_class.NODE_NAME) as rclpy_argv:
         error = _init_rclpy(rclpy_argv)

@@ -18,6 +18,7 @@ from pathlib import Path
 import xml.etree.ElementTree as ET
 
 from py_vision import dds
+import ros_harness
 
 NS = '{http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles}'
 VGA_BYTES = 640 * 480 * 3
@@ -178,3 +179,56 @@ def test_fast_dds_3s_variable_alone_does_not_leave_nodes_on_the_small_default(
     assert path is not None and env['FASTRTPS_DEFAULT_PROFILES_FILE'] == path
     assert segment(path) > dds.SMALL_SEGMENT
     assert env['FASTDDS_DEFAULT_PROFILES_FILE'] == '/etc/mine.xml'
+
+
+def listening(path):
+    """Return the participant's own locator lists: {list name: [(kind, address), ...]}."""
+    rtps = ET.parse(path).getroot().find('.//%sparticipant/%srtps' % (NS, NS))
+    found = {}
+    for name in ('defaultUnicastLocatorList', 'builtin/%smetatrafficUnicastLocatorList' % NS,
+                 'builtin/%smetatrafficMulticastLocatorList' % NS):
+        locators = rtps.findall('%s/%slocator' % (NS + name, NS))
+        found[name.rsplit('}', 1)[-1]] = [(kind.tag[len(NS):], kind.findtext(NS + 'address'))
+                                          for locator in locators for kind in locator]
+    return found
+
+
+# Fast DDS' own choice of locators, shared memory included (nothing listed) ...
+SHM_AND_UDP = {'defaultUnicastLocatorList': [], 'metatrafficUnicastLocatorList': [],
+               'metatrafficMulticastLocatorList': []}
+# ... and UDP alone: every allowed interface, the discovery multicast group.
+UDP_ONLY = {'defaultUnicastLocatorList': [('udpv4', None)],
+            'metatrafficUnicastLocatorList': [('udpv4', None)],
+            'metatrafficMulticastLocatorList': [('udpv4', dds.DISCOVERY_MULTICAST)]}
+
+
+def test_udp_receive_keeps_the_shared_memory_to_send_through():
+    # Fast DDS 2.6.0 to 2.6.5 can stop reading a shared-memory port for good (docs/boards.md,
+    # "A node nobody hears"): a node that receives no images then listens on UDP alone.
+    packaged = dds.packaged_profile()
+    assert listening(packaged) == SHM_AND_UDP
+    vga = dds.segment_size(dds.OWN_SIZE, [], 'usbcam_publisher')
+    fitted = dds.tailor(packaged, vga, localhost=True, udp_receive=True)
+    assert listening(fitted) == UDP_ONLY
+    # Its frames still leave through its own shared memory, sized for them; UDP on loopback.
+    root = ET.parse(fitted).getroot()
+    assert [t.text for t in root.iter(NS + 'transport_id')].count('py_vision_shm') == 2
+    assert segment(fitted) == vga and allowed_interfaces(fitted) == ['127.0.0.1']
+
+
+def test_udp_receive_on_fast_dds_2_6_for_nodes_without_images_unless_turned_off(
+        tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    on_2_6 = ros_harness.ON_HUMBLE  # Humble's rmw_fastrtps 6 runs Fast DDS 2.6 (the boards)
+    assert dds.shm_receive_breaks({}) == on_2_6
+    camera = dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher',
+                                      {'ROS_LOCALHOST_ONLY': '1'}, receives_images=False)
+    assert listening(camera) == (UDP_ONLY if on_2_6 else SHM_AND_UDP)
+    # Nodes that receive images keep receiving them through shared memory.
+    viewer = dds.use_packaged_profile(dds.NO_IMAGES, [], 'usbcam_subscriber',
+                                      {'ROS_LOCALHOST_ONLY': '1'}, receives_images=True)
+    assert listening(viewer) == SHM_AND_UDP
+    env = {dds.SHM_RECEIVE_SETTING: '1', 'ROS_LOCALHOST_ONLY': '1'}
+    assert not dds.shm_receive_breaks(env)
+    assert listening(dds.use_packaged_profile(
+        dds.OWN_SIZE, [], 'usbcam_publisher', env, receives_images=False)) == SHM_AND_UDP

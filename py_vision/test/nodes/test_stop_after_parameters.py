@@ -26,12 +26,14 @@ moment only moves where the signal falls. The rounds are many enough to catch a 
 ignores one signal in three with a probability of 1 - (2/3)**ROUNDS per lane (98% for 10);
 PY_VISION_STOP_ROUNDS asks for more (a soak).
 
-On the boards' Fast DDS 2.6.0 (Humble), now and then a process started while others come and go
-cannot be reached for longer than the 20 s bound: the peer finds no ready service of it, or
-gets no answer, and the node may receive no frames either (docs/boards.md, "A node nobody
-hears"). Such a round still sends its signal and the node must still stop cleanly; its lane
-then takes a new peer, and the test fails when that happens twice in a row in a lane or in more
-than one round in MAX_UNREACHED, and on any other distribution at all.
+On the boards' Fast DDS 2.6.0 (Humble), a process that listens on shared memory can stop
+hearing for good when a process that sent to it exits before it read the message (docs/boards.md,
+"A node nobody hears"); the test's own peers too. usbcam_publisher receives no images and there
+listens on UDP alone: each of its starts must be reached, by a new peer when the lane's peer
+hears nothing (named in a warning). The viewer and cv_bridge_test receive their frames through
+shared memory: for them such a round still sends its signal and the node must still stop
+cleanly; its lane then takes a new peer, and the test fails when that happens twice in a row in
+a lane or in more than one round in MAX_UNREACHED, and on any other distribution at all.
 """
 
 import os
@@ -80,18 +82,45 @@ LANES = [
 ]
 # What a node logs while it cleans up, before node_main's last line.
 CLEANED_UP = {'usbcam_publisher': 'camera released after'}
-# On Humble (Fast DDS 2.6.0), at most one node start in this many may go unreached: measured
-# here about one in 100 to 300 starts with four lanes restarting at once (docs/boards.md).
+# On Humble (Fast DDS 2.6.0), at most one start in this many of a node that receives images
+# may go unreached: about one in 100 to 300 starts with four lanes restarting at once
+# (docs/boards.md). A node that receives none listens on UDP there, and must always be reached.
 MAX_UNREACHED = 10
+SHM_LISTENERS = {'usbcam_subscriber', 'cv_bridge_test'}
+
+
+class LanePeer:
+    """A lane's parameter client (node_peer), replaced by a new one when it hears nothing."""
+
+    def __init__(self, domain_id, name):
+        self.domain_id, self.name, self.count = domain_id, name, 0
+        self.deaf = []  # why each replaced peer was found deaf
+        self.node_peer = ros_harness.RosPeer(domain_id, name=name)
+
+    def replace(self, why=None):
+        """Close this peer and take a new one; why: the reason it was found deaf, if it was."""
+        if why is not None:
+            self.deaf.append(why)
+        deaf, self.node_peer = self.node_peer, None
+        deaf.close()
+        self.count += 1
+        self.node_peer = ros_harness.RosPeer(self.domain_id, name='%s_%d' % (
+            self.name, self.count))
+
+    def close(self):
+        """Close the current peer."""
+        if self.node_peer is not None:
+            self.node_peer.close()
 
 
 def one_round(lane, number, rng, env, peer):
     """
     Run one round; return (None or what went wrong with the node's log, unreached).
 
-    unreached: None, or why the peer could not reach the node, with its log: on Humble only, the
-    round's first call finding no ready service or getting no answer (anywhere else, or in a
-    later call once one was answered, that is what went wrong).
+    unreached: None, or why the peer could not reach the node, with its log: on Humble only and
+    for a node that receives images only, the round's first call finding no ready service or
+    getting no answer (anywhere else, or in a later call once one was answered, that is what
+    went wrong).
     """
     executable, node_name, remaps = lane
     sig = rng.choice([signal.SIGINT, signal.SIGTERM])
@@ -102,17 +131,23 @@ def one_round(lane, number, rng, env, peer):
     try:
         (first_name, first_value), *others = SETS[executable]
         try:
-            set_parameter(peer, node_name, first_name, first_value)
+            set_parameter(peer.node_peer, node_name, first_name, first_value)
         except Unreached as error:
             if not ros_harness.ON_HUMBLE:
                 raise
-            unreached = '%s round %d: %s\n%s' % (node_name, number, error, node.tail())
-            last = 'attempt to reach it'
-        else:
+            if executable in SHM_LISTENERS:
+                unreached = '%s round %d: %s\n%s' % (node_name, number, error, node.tail())
+                last = 'attempt to reach it'
+            else:
+                # This node listens on UDP alone: it is the peer that hears nothing (its own
+                # shared-memory port stopped). A new peer must reach the node.
+                peer.replace('%s round %d: %s' % (node_name, number, error))
+                set_parameter(peer.node_peer, node_name, first_name, first_value)
+        if unreached is None:
             for name, value in others:
-                set_parameter(peer, node_name, name, value)
-            get_parameters(peer, node_name, READ[executable])
-            describe_parameters(peer, node_name, READ[executable])
+                set_parameter(peer.node_peer, node_name, name, value)
+            get_parameters(peer.node_peer, node_name, READ[executable])
+            describe_parameters(peer.node_peer, node_name, READ[executable])
             last = 'parameter call'
         delay = rng.uniform(0.0, 0.5)
         time.sleep(delay)  # the random moment itself, not a synchronisation
@@ -150,13 +185,14 @@ def test_every_node_stops_on_every_signal_after_parameter_calls(ros_env, domain_
     seed = random.randrange(1 << 30)
     failures = []
     unreached = []
+    deaf = []
 
     def rounds(lane):
         node_name = lane[1]
         rng = random.Random('%d %s' % (seed, node_name))
         peer = previous = None
         try:
-            peer = ros_harness.RosPeer(domain_id, name='param_client_%s' % node_name)
+            peer = LanePeer(domain_id, 'param_client_%s' % node_name)
             for number in range(ROUNDS):
                 failure, lost = one_round(lane, number, rng, ros_env, peer)
                 if failure:
@@ -171,15 +207,13 @@ def test_every_node_stops_on_every_signal_after_parameter_calls(ros_env, domain_
                             previous, lost))
                         return
                     # It may be this peer that nobody hears: the next round asks with a new one.
-                    deaf, peer = peer, None
-                    deaf.close()
-                    peer = ros_harness.RosPeer(
-                        domain_id, name='param_client_%s_%d' % (node_name, number))
+                    peer.replace()
                 previous = lost
         except Exception as error:  # the test's own peer failed: say so, do not hang
             failures.append('%s: %s: %s' % (node_name, type(error).__name__, error))
         finally:
             if peer is not None:
+                deaf.extend(peer.deaf)
                 peer.close()
 
     threads = [threading.Thread(target=rounds, args=(lane,)) for lane in LANES]
@@ -189,6 +223,10 @@ def test_every_node_stops_on_every_signal_after_parameter_calls(ros_env, domain_
         thread.join()
     starts = ROUNDS * len(LANES)
     said = '\n'.join(unreached)
+    if deaf:
+        warnings.warn('Fast DDS 2.6.0: %d test peer(s) stopped hearing, each replaced by a new '
+                      'one that reached the node (docs/boards.md, "A node nobody hears"):\n%s'
+                      % (len(deaf), '\n'.join(deaf)))
     if len(unreached) * MAX_UNREACHED > starts:
         failures.append('%d of %d node starts could not be reached (Humble allows one in %d):'
                         '\n%s' % (len(unreached), starts, MAX_UNREACHED, said))

@@ -1,0 +1,472 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+How often a plain rclpy node, started while others start and stop, cannot be reached (issue 34).
+
+  . scripts/board_env.sh && python bench/dds_discovery_repro.py [--starts 200] [--lanes 4]
+      [--within 10] [VARIANT ...]              (Humble, Fast DDS 2.6.0: the boards' versions)
+  .venv/bin/python bench/dds_discovery_repro.py ...          (Jazzy, Fast DDS 2.14, to compare)
+
+No py_vision node runs: each start is this script's own `--node` mode, a bare rclpy node (its
+parameter services, a publisher and a subscription of a small message at 10 Hz) that stops on
+SIGINT or SIGTERM. Lanes run at the same time, as in the stop test
+(py_vision/test/nodes/test_stop_after_parameters.py): each lane has a long-lived peer (an rclpy
+context of this process) and, again and again, starts a node, waits until its peer both sees the
+node's name in the graph and gets an answer from its get_parameters service, then stops it with
+SIGINT or SIGTERM (SIGKILL after 10 s). A start is reached when both happen within --within
+seconds (10). Unreached starts are listed with what the peer's graph held and the node's log
+(what it saw of the graph).
+
+Variants (all with discovery on this host, as the tests run, unless said):
+  default      Fast DDS' defaults in nodes and peers
+  profile      the nodes on py_vision's profile as its nodes tailor it (py_vision.dds), a
+               subscriber's 0.5 MB segment; the peers on defaults, as in the tests
+  no-shm       the profile with its shared-memory transport removed (UDP only), nodes and peers
+  daemon       as default, with the ros2 daemon running on the domain
+  subnet       as default, discovery on the network (no ROS_LOCALHOST_ONLY / discovery range)
+  fixed        the nodes on the profile py_vision gives a node that receives no images
+               (py_vision.dds, as usbcam_publisher): on Humble it listens on UDP alone, so
+               receives nothing through shared memory (it still sends through it)
+Prints a Markdown table, writes bench/results/dds_discovery.json (one entry per variant run).
+"""
+
+import argparse
+import fcntl
+import json
+import os
+from pathlib import Path
+import random
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+SCRIPT = Path(__file__).resolve()
+BENCH = SCRIPT.parent
+RESULTS = BENCH / 'results'
+VARIANTS = ('default', 'profile', 'no-shm', 'daemon', 'subnet', 'fixed')
+# Ad-hoc domain ids of this investigation, taken through the tests' own lock files so that a
+# test run never shares one with it.
+DOMAINS = range(170, 200)
+LOCK_DIR = Path(tempfile.gettempdir()) / 'py_vision_test_domains'
+STOP_WITHIN_S = 10.0
+RESEND_AFTER_S = 2.0
+POLL_S = 0.05
+# Fast DDS warnings every node prints as it stops, left out of an unreached node's log (the
+# first one is also what a stuck shared-memory listener repeats: counted apart, STUCK).
+SHUTDOWN_NOISE = ('Error receiving data', 'remove_local_writer', 'Automatically unmatching',
+                  'NO readers are listening')
+STUCK = 'Error receiving data: No such file or directory'
+
+
+def fast_dds_warnings():
+    """Make Fast DDS print its warnings (it prints only errors unless told; rcl never tells it)."""
+    import ctypes
+    try:
+        with open('/proc/self/maps') as maps:
+            lib = next(line.split()[-1] for line in maps if 'libfastrtps.so' in line)
+        # eprosima::fastdds::dds::Log::SetVerbosity(Log::Kind), a static function; Warning = 1.
+        getattr(ctypes.CDLL(lib), '_ZN8eprosima7fastdds3dds3Log12SetVerbosityENS2_4KindE')(1)
+    except (OSError, StopIteration, AttributeError) as error:
+        print('Fast DDS warnings stay off: %s' % error, flush=True)
+
+
+def run_node(name):
+    """Be the node under test: parameters, a publisher, a subscription; stop on a signal."""
+    import rclpy
+    from std_msgs.msg import String
+
+    rclpy.init()
+    fast_dds_warnings()
+    stop = threading.Event()
+    # After rclpy.init(), replacing rclpy's handlers: the loop below polls the flag.
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    node = rclpy.create_node(name)
+    publisher = node.create_publisher(String, 'repro_chatter', 10)
+    node.create_subscription(String, 'repro_chatter', lambda msg: None, 10)
+    seen = {'names': None}
+
+    def tick():
+        publisher.publish(String(data=name))
+        names = sorted(node.get_node_names())
+        if names != seen['names']:
+            seen['names'] = names
+            print('%.2f sees %s' % (time.monotonic(), ' '.join(names)), flush=True)
+    node.create_timer(0.1, tick)
+    print('%.2f up' % time.monotonic(), flush=True)
+    while not stop.is_set():
+        try:
+            rclpy.spin_once(node, timeout_sec=0.1)
+        except Exception as error:  # as py_vision's nodes do: say it, keep going
+            # Humble's rclpy raises here when a reply finds the client's reader not yet
+            # matched ('client will not receive response'); the client asks again.
+            print('%.2f callback failed: %s' % (time.monotonic(), error), flush=True)
+    node.destroy_node()
+    rclpy.shutdown()
+    print('%.2f stopped' % time.monotonic(), flush=True)
+
+
+class Peer:
+    """A long-lived rclpy context and node of this process, spun by a thread of its own."""
+
+    def __init__(self, domain_id, name):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = rclpy.create_node(name, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.clients = []
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self):
+        while self.context.ok():
+            try:
+                self.executor.spin_once(timeout_sec=0.05)
+            except Exception:  # the context was shut down under the executor
+                if self.context.ok():
+                    raise
+                return
+
+    def reach(self, name, within):
+        """Return (seconds until the name was seen or None, until the answer or None, graph)."""
+        from rcl_interfaces.srv import GetParameters
+        client = self.node.create_client(GetParameters, '/%s/get_parameters' % name)
+        # Kept until the peer closes: destroying endpoints while messages arrive crashed Fast
+        # DDS 2.6.0 (TopicPayloadPool::shrink) in this process three times in 1000 starts.
+        self.clients.append(client)
+        start = time.monotonic()
+        seen = answered = future = None
+        sent = 0.0
+        try:
+            while time.monotonic() - start < within and (seen is None or answered is None):
+                now = time.monotonic()
+                if seen is None and name in self.node.get_node_names():
+                    seen = now - start
+                if answered is None:
+                    if future is not None and future.done():
+                        answered = now - start
+                    elif client.service_is_ready() and (future is None
+                                                        or now - sent > RESEND_AFTER_S):
+                        if future is not None:
+                            client.remove_pending_request(future)
+                        future = client.call_async(GetParameters.Request(names=['use_sim_time']))
+                        sent = now
+                time.sleep(POLL_S)
+            graph = None
+            if seen is None or answered is None:
+                service = '/%s/get_parameters' % name
+                graph = {
+                    'service_ready': client.service_is_ready(),
+                    'request_readers': sorted(i.node_name for i in
+                                              self.node.get_subscriptions_info_by_topic(
+                                                  'rq%sRequest' % service, no_mangle=True)),
+                    'reply_writers': sorted(i.node_name for i in
+                                            self.node.get_publishers_info_by_topic(
+                                                'rr%sReply' % service, no_mangle=True)),
+                    'nodes': sorted(self.node.get_node_names()),
+                }
+            return seen, answered, graph
+        finally:
+            if future is not None and not future.done():
+                client.remove_pending_request(future)
+
+    def close(self):
+        import rclpy
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)
+        self._thread.join(2.0)
+
+
+def take_domain():
+    """Return (domain id, lock handle) of a free id in DOMAINS."""
+    LOCK_DIR.mkdir(exist_ok=True)
+    for candidate in DOMAINS:
+        handle = open(LOCK_DIR / ('%d.lock' % candidate), 'w')
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            handle.close()
+            continue
+        return candidate, handle
+    raise RuntimeError('no free ROS_DOMAIN_ID in %d-%d' % (DOMAINS[0], DOMAINS[-1]))
+
+
+def on_humble():
+    import rclpy
+    return not hasattr(rclpy, 'parameter_client')
+
+
+def profile_file(workdir, variant):
+    """Write and return the profile file the nodes of a variant get (None: Fast DDS defaults)."""
+    sys.path.insert(0, str(BENCH))
+    import bench_common  # noqa: F401 (puts the installed py_vision on sys.path)
+    from py_vision import dds
+    if variant == 'fixed':
+        env = {'ROS_LOCALHOST_ONLY': '1'} if on_humble() else {
+            'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}
+        return dds.use_packaged_profile(dds.NO_IMAGES, [], 'repro', environ=env,
+                                        receives_images=False)
+    path = dds.tailor(dds.packaged_profile(), dds.SMALL_SEGMENT, localhost=True)
+    if variant == 'no-shm':
+        text = Path(path).read_text()
+        start = text.index('<transport_descriptor>')
+        end = text.index('</transport_descriptor>', start) + len('</transport_descriptor>')
+        text = text[:start] + text[end:]
+        text = text.replace('<transport_id>py_vision_shm</transport_id>', '', 1)
+        path = str(Path(workdir) / 'no_shm.xml')
+        Path(path).write_text(text)
+    return path
+
+
+def variant_env(variant, domain_id, workdir):
+    """Return (the nodes' environment, the peers' environment) of a variant."""
+    env = dict(os.environ)
+    for name in ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE',
+                 'RMW_IMPLEMENTATION', 'ROS_LOCALHOST_ONLY', 'ROS_AUTOMATIC_DISCOVERY_RANGE',
+                 'ROS_STATIC_PEERS'):
+        env.pop(name, None)
+    env.update(ROS_DOMAIN_ID=str(domain_id), PYTHONUNBUFFERED='1')
+    if variant != 'subnet':
+        if on_humble():
+            env['ROS_LOCALHOST_ONLY'] = '1'
+        else:
+            env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    nodes, peers = dict(env), dict(env)
+    if variant in ('profile', 'no-shm', 'fixed'):
+        nodes['FASTRTPS_DEFAULT_PROFILES_FILE'] = profile_file(workdir, variant)
+    if variant == 'no-shm':
+        peers['FASTRTPS_DEFAULT_PROFILES_FILE'] = nodes['FASTRTPS_DEFAULT_PROFILES_FILE']
+    return nodes, peers
+
+
+def fast_dds_segments():
+    """Return the number of Fast DDS files in /dev/shm."""
+    try:
+        return sum(1 for entry in os.listdir('/dev/shm')
+                   if entry.startswith(('fastrtps', 'sem.fastrtps')))
+    except OSError:
+        return None
+
+
+def udp_ports(pid):
+    """Return the local UDP ports a process has sockets on."""
+    inodes = set()
+    try:
+        for fd in os.listdir('/proc/%d/fd' % pid):
+            try:
+                target = os.readlink('/proc/%d/fd/%s' % (pid, fd))
+            except OSError:
+                continue
+            if target.startswith('socket:['):
+                inodes.add(target[8:-1])
+        with open('/proc/%d/net/udp' % pid) as table:
+            rows = [line.split() for line in table.readlines()[1:]]
+    except OSError:
+        return []
+    return sorted({int(row[1].split(':')[1], 16) for row in rows if row[9] in inodes})
+
+
+def shm_ports(pid=None):
+    """
+    Return the Fast DDS shared-memory ports in /dev/shm, or those a process maps.
+
+    A port a process maps after it was removed from /dev/shm (another process reset it) is
+    given as '<port> deleted': what the process writes there nobody reads.
+    """
+    try:
+        if pid is None:
+            names = os.listdir('/dev/shm')
+        else:
+            with open('/proc/%d/maps' % pid) as maps:
+                names = {line.split('/dev/shm/', 1)[1].strip()
+                         for line in maps if '/dev/shm/fastrtps_port' in line}
+    except OSError:
+        return []
+    ports = set()
+    for name in names:
+        number, _, deleted = name[len('fastrtps_port'):].partition(' ')
+        if name.startswith('fastrtps_port') and number.isdigit():
+            ports.add('%s deleted' % number if deleted else number)
+    return sorted(ports, key=lambda port: int(port.split()[0]))
+
+
+def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir, peers):
+    """
+    Start, reach and stop `starts` nodes one after the other; append a record for each.
+
+    The lane's peer is appended to peers, for the caller to close once the results are saved:
+    Fast DDS 2.6.0 crashed now and then as a peer with many clients was destroyed.
+    """
+    peer = Peer(domain_id, 'repro_peer_%d' % lane)
+    peers.append(peer)
+    for number in range(starts):
+        name = 'repro_%d_%d' % (lane, number)
+        log_path = Path(workdir) / ('%s.log' % name)
+        with open(log_path, 'w') as log:
+            proc = subprocess.Popen(
+                [sys.executable, str(SCRIPT), '--node', name], env=nodes_env, stdout=log,
+                stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
+        try:
+            seen, answered, graph = peer.reach(name, within)
+            if graph is not None:
+                graph.update(node_udp=udp_ports(proc.pid), node_shm=shm_ports(proc.pid),
+                             peers_udp=udp_ports(os.getpid()),
+                             peers_shm=shm_ports(os.getpid()), dev_shm=shm_ports())
+        finally:
+            sig = rng.choice([signal.SIGINT, signal.SIGTERM])
+            proc.send_signal(sig)
+            try:
+                status = proc.wait(STOP_WITHIN_S)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                status = proc.wait()
+        record = {'lane': lane, 'number': number, 'name_s': seen, 'answer_s': answered,
+                  'reached': seen is not None and answered is not None, 'status': status}
+        if not record['reached']:
+            record['graph'] = graph
+            lines = log_path.read_text(errors='replace').splitlines()
+            # Fast DDS 2.6.0's shared-memory listener stuck (docs/boards.md): counted, as it
+            # repeats tens of thousands of times.
+            record['shm_read_failures'] = sum(1 for line in lines if STUCK in line)
+            record['log'] = [line for line in lines
+                             if not any(noise in line for noise in SHUTDOWN_NOISE)][-40:]
+            print('  unreached %s: %s' % (name, json.dumps(graph)), flush=True)
+        else:
+            log_path.unlink()
+        results.append(record)
+        if len(results) % 50 == 0:
+            print('  %d starts, %d reached' % (
+                len(results), sum(1 for r in results if r['reached'])), flush=True)
+
+
+def measure(variant, total, lanes, within, peers):
+    """Run one variant: `total` starts over `lanes` lanes; return its summary dict."""
+    domain_id, lock = take_domain()
+    workdir = tempfile.mkdtemp(prefix='dds_repro_')
+    daemon = None
+    try:
+        nodes_env, peers_env = variant_env(variant, domain_id, workdir)
+        for name in ('ROS_LOCALHOST_ONLY', 'ROS_AUTOMATIC_DISCOVERY_RANGE',
+                     'FASTRTPS_DEFAULT_PROFILES_FILE'):
+            os.environ.pop(name, None)
+            if name in peers_env:
+                os.environ[name] = peers_env[name]
+        if variant == 'daemon':
+            subprocess.run(['ros2', 'daemon', 'stop'], env=nodes_env, capture_output=True)
+            subprocess.run(['ros2', 'daemon', 'start'], env=nodes_env, capture_output=True,
+                           check=True, timeout=60)
+            daemon = nodes_env
+        before = fast_dds_segments()
+        results = []
+        started = time.monotonic()
+        per_lane = [total // lanes + (1 if lane < total % lanes else 0) for lane in range(lanes)]
+        threads = [threading.Thread(target=run_lane, args=(
+            lane, per_lane[lane], within, nodes_env, domain_id,
+            random.Random('%s %d' % (variant, lane)), results, workdir, peers))
+            for lane in range(lanes)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        reached = [r for r in results if r['reached']]
+        answers = sorted(r['answer_s'] for r in reached)
+        return {
+            'variant': variant, 'starts': len(results), 'reached': len(reached),
+            'unreached': [r for r in results if not r['reached']],
+            'answer_median_s': round(answers[len(answers) // 2], 2) if answers else None,
+            'answer_max_s': round(answers[-1], 2) if answers else None,
+            'not_stopped_cleanly': sum(1 for r in results if r['status'] != 0),
+            'shm_files_before': before, 'shm_files_after': fast_dds_segments(),
+            'seconds': round(time.monotonic() - started, 1), 'lanes': lanes, 'within_s': within,
+            'domain_id': domain_id,
+        }
+    finally:
+        if daemon is not None:
+            subprocess.run(['ros2', 'daemon', 'stop'], env=daemon, capture_output=True)
+        lock.close()
+
+
+def versions():
+    """Return the ROS distribution's rclpy version and the Fast DDS library in use."""
+    import rclpy
+    found = {'python': '%d.%d' % sys.version_info[:2], 'humble': on_humble()}
+    try:
+        with open('/proc/self/maps') as maps:
+            libs = {line.split()[-1] for line in maps if 'libfastrtps.so' in line}
+        found['fastdds'] = sorted(os.path.realpath(lib).rsplit('.so.', 1)[-1] for lib in libs)
+    except OSError:
+        pass
+    found['rclpy'] = os.path.dirname(rclpy.__file__)
+    return found
+
+
+def save(run):
+    """Append one variant's run to bench/results/dds_discovery.json."""
+    RESULTS.mkdir(exist_ok=True)
+    out = RESULTS / 'dds_discovery.json'
+    try:
+        previous = json.loads(out.read_text())
+    except (OSError, ValueError):
+        previous = []
+    out.write_text(json.dumps(previous + [run], indent=1))
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('variants', nargs='*', default=['default'],
+                        help='any of %s (default)' % ', '.join(VARIANTS))
+    parser.add_argument('--starts', type=int, default=200, help='node starts per variant')
+    parser.add_argument('--lanes', type=int, default=4, help='lanes at the same time (4)')
+    parser.add_argument('--within', type=float, default=10.0, help='seconds to reach a node')
+    parser.add_argument('--node', help=argparse.SUPPRESS)
+    args, _ = parser.parse_known_args(argv)
+    if args.node:
+        run_node(args.node)
+        return 0
+    unknown = [v for v in args.variants if v not in VARIANTS]
+    if unknown:
+        parser.error('unknown variant(s) %s: choose from %s' % (
+            ', '.join(unknown), ', '.join(VARIANTS)))
+    runs = []
+    for variant in args.variants:
+        print('%s: %d starts in %d lanes' % (variant, args.starts, args.lanes), flush=True)
+        peers = []
+        run = measure(variant, args.starts, args.lanes, args.within, peers)
+        found = versions()  # Fast DDS is loaded once a context has been initialised
+        run.update(versions=found, when=time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()))
+        save(run)  # each variant as soon as it is measured, before its peers are closed
+        runs.append(run)
+        for peer in peers:
+            peer.close()
+    print()
+    print('| variant | Fast DDS | reached within %gs | median / max answer (s) | time (s) |'
+          % args.within)
+    print('|---|---|---|---|---|')
+    for run in runs:
+        print('| %s | %s | %d of %d | %s / %s | %.0f |' % (
+            run['variant'], ','.join(found.get('fastdds', [])), run['reached'], run['starts'],
+            run['answer_median_s'], run['answer_max_s'], run['seconds']))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
