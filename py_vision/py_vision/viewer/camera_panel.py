@@ -316,6 +316,7 @@ class StepParameters:
         self.parameters: Dict[str, Dict[str, Any]] = {}  # name -> control_json()
         self.loaded = False
         self.problem = ''
+        self.namesakes = 1   # how many nodes in the graph bear the target's name
         # The executor's thread only.
         self.calls: Optional[_Calls] = None
         self._generation = 0
@@ -326,7 +327,9 @@ class StepParameters:
         """Return GET /camera's `step` (None without a processing node); under the lock."""
         if self.target is None:
             return None
-        if self.problem:
+        if self.namesakes > 1:
+            message = _namesakes_problem(self.target, self.namesakes)
+        elif self.problem:
             message = self.problem
         elif not self.loaded:
             message = 'reading the step parameters of %s' % self.target
@@ -535,9 +538,12 @@ class CameraPanel:
         step = self._step
         with self._lock:
             target, loaded, parameters = step.target, step.loaded, dict(step.parameters)
+            namesakes = step.namesakes
         if target is None:
             raise CameraError(404, 'the frames shown come through no processing node with '
                               'step parameters')
+        if namesakes > 1:
+            raise CameraError(409, _namesakes_problem(target, namesakes))
         if not loaded:
             raise CameraError(503, 'still reading the step parameters of %s; try again' %
                               target)
@@ -635,6 +641,10 @@ class CameraPanel:
         candidates = ([self._own_name] if self._runs_step else []) + via
         self._step.follow(next((name for name in candidates
                                 if name not in self._step.without), None))
+        nodes = self._node.get_node_names_and_namespaces()
+        with self._lock:
+            self._step.namesakes = sum(self._full_name(namespace, name) == self._step.target
+                                       for name, namespace in nodes)
         if publisher != self._publisher:
             if self._calls is not None:
                 self._calls.destroy('is no longer the camera of %s' % self._topic)
@@ -653,7 +663,7 @@ class CameraPanel:
             # Nodes that share a name share its parameter services: what the panel reads may
             # come from either, and a change reaches both.
             namesakes = sum(self._full_name(namespace, name) == publisher
-                            for name, namespace in self._node.get_node_names_and_namespaces())
+                            for name, namespace in nodes)
         with self._lock:
             self._publishers = publishers
             if namesakes > 1 and self._namesakes <= 1:
@@ -719,7 +729,7 @@ class CameraPanel:
 
     def _on_event(self, event):
         """Apply a parameter change of the publisher or the step (made here or elsewhere)."""
-        if event.node == self._step.target and event.node is not None:
+        if event.node == self._step.target:
             self._on_step_event(event)
         if event.node != self._publisher:
             return

@@ -889,3 +889,35 @@ def test_without_a_processing_node_a_step_change_is_a_404(launch):
                what='the controls in GET /camera')
     status, _, answer = post(port, {'gain': 1.0}, path='/camera/step')
     assert status == 404 and 'no processing node' in answer['error'], answer
+
+
+def test_two_nodes_with_the_step_node_s_name_are_said_and_not_changed():
+    # As for the camera's node: two nodes of one name share its parameter services.
+    from types import SimpleNamespace
+    from py_vision.control_descriptor import step_constraints
+    from py_vision.viewer.camera_access import CameraError
+    from py_vision.viewer.camera_panel import CameraPanel
+    node = GraphNode()
+    node.answers = {
+        'list_parameters': lambda request: SimpleNamespace(
+            result=SimpleNamespace(names=['gain'])),
+        'describe_parameters': lambda request: SimpleNamespace(descriptors=[descriptor(
+            'gain', type=3, additional_constraints=step_constraints('mine:Step'))]),
+        'get_parameters': lambda request: SimpleNamespace(values=[ros_value(1.0)])}
+    panel = CameraPanel(node, '/usb_camera/image', runs_step=True)
+    node.infos = [node_info('usbcam_publisher'), node_info('usbcam_subscriber')]
+    panel._refresh()
+    step = panel.describe()['step']
+    assert (step['node'], step['step'], step['message']) == (
+        '/usbcam_subscriber', 'mine:Step', '')
+    assert step['parameters']['gain']['value'] == 1.0
+    node.infos.append(node_info('usbcam_subscriber'))
+    panel._refresh()
+    assert '2 nodes are named /usbcam_subscriber' in panel.describe()['step']['message']
+    try:
+        panel.set_step_parameters({'gain': 2.0})
+    except CameraError as error:
+        assert error.status == 409 and 'give each its own name' in str(error)
+    else:
+        raise AssertionError('a change reaching two nodes was sent')
+    assert not any(service == 'set_parameters' for service, _, _ in node.sent)

@@ -294,7 +294,8 @@
     w.spec = c;
     w.box.classList.toggle("unset", c.value === null);
     w.box.classList.toggle("inactive", Boolean(c.inactive));
-    w.why.textContent = c.inactive ? "inactive " + c.inactive : "";
+    w.why.textContent = c.inactive ? "inactive " + c.inactive
+      : (c.read_only && c.group === "step" ? "read-only: set when the node starts" : "");
     w.value.textContent = describeValue(c, c.value);
     if (held.has(key) || queued.has(key)) { return; }
     if (w.input.type === "checkbox") {
