@@ -13,15 +13,21 @@
 # limitations under the License.
 
 """
-How a parameter says it is a camera control: written by control_params, read by camera_panel.
+How a parameter says it is a camera control or a step's: by words in its descriptor.
+
+control_params and vision_step write them, camera_panel reads them.
 
 A camera control's descriptor has `additional_constraints` beginning with ``camera control``,
 then its V4L2 id, type, step and default (``camera control 0x00980900 (integer, step 1,
 default 0)``; a button's ``(button)``), ``; inactive while ...`` when the camera ignores it
 now and ``; read-only``; one of usb_cam's names has ``camera control: usb_cam name for
 <control>``. A menu control's description ends with its entries: ``Auto Exposure; menu:
-1=Manual Mode; 3=Aperture Priority Mode`` (an integer menu's labels are its values). Only
-strings here: neither side's layer is imported.
+1=Manual Mode; 3=Aperture Priority Mode`` (an integer menu's labels are its values).
+
+A processing step's own parameter (vision_step declares it beside the node's) has
+``step parameter of <step>``, then ``; one of: a | b`` when it takes one of a few strings and
+``; accepts <words>`` when a further condition says what it takes. Only strings here: neither
+side's layer is imported.
 """
 
 from dataclasses import dataclass
@@ -29,9 +35,13 @@ import re
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 __all__ = ['CONTROL_MARK', 'ControlWords', 'alias_constraints', 'control_constraints',
-           'describe', 'is_control', 'parse_constraints', 'parse_menu']
+           'describe', 'is_control', 'parse_constraints', 'parse_menu', 'parse_step',
+           'STEP_MARK', 'step_constraints', 'StepWords']
 
 CONTROL_MARK = 'camera control'
+STEP_MARK = 'step parameter of '
+_CHOICES_MARK = 'one of: '
+_CHOICE_SEPARATOR = ' | '
 _MENU_MARK = 'menu: '
 _ALIAS = re.compile(r'\bname for ([A-Za-z0-9_]+)')
 _INACTIVE = re.compile(r'\binactive (while [^;]*)')
@@ -107,3 +117,33 @@ def parse_menu(description: str) -> Optional[List[Dict[str, Any]]]:
             break
         entries.append({'value': number, 'label': label.strip()})
     return entries or None
+
+
+def step_constraints(step: str, choices: Sequence[str] = (), accepted: str = '') -> str:
+    """Return the additional_constraints of a parameter of step: its mark, choices, words."""
+    words = STEP_MARK + step
+    if choices:
+        words += '; %s%s' % (_CHOICES_MARK, _CHOICE_SEPARATOR.join(choices))
+    if accepted:
+        words += '; accepts %s' % accepted
+    return words
+
+
+@dataclass(frozen=True)
+class StepWords:
+    """What a step parameter's additional_constraints say."""
+
+    step: str                      # the step's name, as the node's `step` gives it
+    choices: Tuple[str, ...]       # the strings it takes, when it takes one of a few
+
+
+def parse_step(constraints: str) -> Optional[StepWords]:
+    """Return what a step parameter's constraints say, or None when they are not one's."""
+    if not constraints.startswith(STEP_MARK):
+        return None
+    parts = constraints[len(STEP_MARK):].split('; ')
+    choices: Tuple[str, ...] = ()
+    for part in parts[1:]:
+        if part.startswith(_CHOICES_MARK):
+            choices = tuple(part[len(_CHOICES_MARK):].split(_CHOICE_SEPARATOR))
+    return StepWords(parts[0].strip(), choices)

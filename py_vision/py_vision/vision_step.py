@@ -31,6 +31,7 @@ through a backlog of old frames. docs/processing.md explains it. cv_bridge_test 
 running the `circle` step under its own name and topic.
 """
 
+import dataclasses
 from pathlib import Path
 import threading
 import traceback
@@ -38,6 +39,7 @@ from typing import Any, Optional, Sequence, Tuple
 
 import numpy as np
 from py_vision import dds, ros_arguments
+from py_vision.control_descriptor import step_constraints
 from py_vision.cv_bridge import CvBridge, CvBridgeError
 from py_vision.diagnostics import Diagnostics, ERROR, OK, Recent, Status, WARN
 from py_vision.latest_frame import LatestFrameWorker
@@ -177,6 +179,7 @@ class VisionStep(Node):
         self.step_target, step_class = loader.find(self.step_name)
         specs = step_parameters(step_class)
         loader.check_parameters(self.step_name, specs, self.NODE_PARAMETERS)
+        specs = tuple(marked(spec, self.step_name) for spec in specs)
         self.step = loader.make(self.step_name, step_class)
         step_values = {spec.name: params.declare(
             spec, self._parameter_applier(spec.name) if spec.live else None) for spec in specs}
@@ -209,9 +212,10 @@ class VisionStep(Node):
         # OpenCV windows belong to the executor's thread: the worker hands frames over.
         self._show_request = self.create_guard_condition(self._show_newest)
         self.create_timer(STATS_PERIOD_S, self.report_stats)
-        # The panel shows the camera these frames come from, upstream of this node.
+        # The panel shows the camera these frames come from, upstream of this node, and the
+        # step's parameters.
         self.display.attach(self, self.stats, self.publisher_.topic_name,
-                            camera_topic=self.subscription_.topic_name)
+                            camera_topic=self.subscription_.topic_name, runs_step=True)
         self._recent = Recent()
         self.diagnostics = Diagnostics(params, hardware_id=self.subscription_.topic_name)
         self.diagnostics.add('processing', self.processing_status)
@@ -373,6 +377,12 @@ class VisionStep(Node):
                         self.step_name, type(error).__name__, error))
         if self.display is not None:
             self.display.close()
+
+
+def marked(spec: Spec, step_name: str) -> Spec:
+    """Return spec with its descriptor marked as a parameter of the step (the viewer's panel)."""
+    return dataclasses.replace(spec, constraints=step_constraints(
+        step_name, spec.choices, spec.constraints or spec.accepted))
 
 
 def _described(value: Any) -> str:

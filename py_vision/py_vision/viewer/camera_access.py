@@ -34,3 +34,6 @@ class CameraAccess(Protocol):
 
     def set_controls(self, values: Dict[str, Any]) -> Dict[str, Any]:
         """Apply name: value; return name: {applied, reason}; raise CameraError if none can."""
+
+    def set_step_parameters(self, values: Dict[str, Any]) -> Dict[str, Any]:
+        """Set the processing step's name: value like set_controls (404: no such node)."""

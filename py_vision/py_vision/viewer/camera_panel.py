@@ -24,6 +24,11 @@ A camera control is a parameter whose descriptor's additional_constraints mark i
 reports. What the camera is (device, pixel format, measured rate)
 comes from the publisher's parameters and, when it publishes them, its /diagnostics.
 
+When the frames come through a processing node (vision_step, cv_bridge_test), or the viewer is
+that node's own, the panel also shows the parameters that node's step declares (their
+descriptors marked ``step parameter of <step>``, control_descriptor), read and set the same
+way: `StepParameters` follows that node.
+
 Every ROS call is made on the executor's thread and answered there (async clients, nothing
 waits): the HTTP threads hand their requests over through a guard condition and wait for the
 answer with a bounded timeout. It implements camera_access.CameraAccess.
@@ -37,7 +42,8 @@ import threading
 import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
-from py_vision.control_descriptor import is_control, parse_constraints, parse_menu
+from py_vision.control_descriptor import (
+    is_control, parse_constraints, parse_menu, parse_step)
 from py_vision.viewer.camera_access import CameraError
 from rcl_interfaces.msg import (
     Parameter as ParameterMsg, ParameterEvent, ParameterType, ParameterValue)
@@ -100,10 +106,12 @@ def control_json(descriptor, value: ParameterValue) -> Optional[Dict[str, Any]]:
     control (its additional_constraints marked as one, control_descriptor) or a stream setting.
     Its type, range, step, read-only flag and description are the descriptor's; its menu is the
     one the description lists; `button`, `alias_of` (usb_cam's names) and `inactive` ('while
-    ...') are what the constraints say.
+    ...') are what the constraints say. A processing step's parameter (marked as one) is mapped
+    the same way, in group 'step', its choices (strings) as its menu.
     """
     words = parse_constraints(descriptor.additional_constraints, _KINDS)
-    if words is None and descriptor.name not in STREAM_SETTINGS:
+    step_words = parse_step(descriptor.additional_constraints)
+    if words is None and step_words is None and descriptor.name not in STREAM_SETTINGS:
         return None
     kind = _TYPE_NAMES.get(descriptor.type) or _TYPE_NAMES.get(value.type)
     if kind is None and words is not None and words.kind in _TYPE_OF_NAME:
@@ -116,11 +124,16 @@ def control_json(descriptor, value: ParameterValue) -> Optional[Dict[str, Any]]:
         bounds = descriptor.floating_point_range[0]
         step, kind = bounds.step, kind or 'double'
     read_only = bool(descriptor.read_only)
+    if step_words is not None:
+        menu = [{'value': choice, 'label': choice} for choice in step_words.choices] or None
+        group = 'step'
+    else:
+        menu = parse_menu(descriptor.description)
+        group = 'stream' if words is None else 'camera'
     return {'type': kind, 'value': python_value(value),
             'min': bounds.from_value if bounds else None,
             'max': bounds.to_value if bounds else None, 'step': step,
-            'menu': parse_menu(descriptor.description), 'read_only': read_only,
-            'live': not read_only, 'group': 'stream' if words is None else 'camera',
+            'menu': menu, 'read_only': read_only, 'live': not read_only, 'group': group,
             'description': descriptor.description,
             'alias_of': words.alias_of if words else None,
             'inactive': words.inactive if words else None,
@@ -218,12 +231,181 @@ class _Calls:
         entry[3](status, why)
 
 
+def read_parameters(calls: _Calls, wanted: Callable[[Any], bool],
+                    on_read: Callable[[List[Any], List[ParameterValue]], None],
+                    failed: Callable[[int, str], None], changed: Callable[[], None],
+                    current: Callable[[], bool]) -> None:
+    """
+    Read a node's parameters whose descriptor is wanted: list, describe, then get them.
+
+    on_read(descriptors, values) follows on the executor; failed(status, why) when a call
+    fails; changed() when a describe or get is answered short: rclpy answers with nothing at
+    all when one of the names is not declared any more (the node's parameters changed under
+    the read). Nothing follows once current() is False (the node is no longer the one shown).
+    """
+    def listed(response):
+        if current():
+            names = list(response.result.names)
+            calls.call('describe', DescribeParameters.Request(names=names),
+                       lambda reply: described(names, reply), failed)
+
+    def described(names, response):
+        if not current():
+            return
+        if len(response.descriptors) != len(names):
+            changed()
+            return
+        descriptors = [d for d in response.descriptors if wanted(d)]
+        calls.call('get', GetParameters.Request(names=[d.name for d in descriptors]),
+                   lambda reply: got(descriptors, reply), failed)
+
+    def got(descriptors, response):
+        if not current():
+            return
+        if len(response.values) != len(descriptors):
+            changed()
+            return
+        on_read(descriptors, list(response.values))
+
+    calls.call('list', ListParameters.Request(), listed, failed)
+
+
+def send_set(calls: Optional[_Calls], target: str, parameters: List[ParameterMsg],
+             answer: concurrent.futures.Future) -> None:
+    """Set parameters on target (its calls; None: gone): answer gets the results or why not."""
+    if calls is None:
+        answer.set_exception(CameraError(503, '%s is gone' % target))
+    elif not calls.ready('set'):
+        answer.set_exception(CameraError(503, '%s does not offer its parameter services '
+                                         'now' % target))
+    else:
+        def replied(response):
+            if len(response.results) == len(parameters):
+                answer.set_result(response.results)
+            else:
+                answer.set_exception(CameraError(502, '%s answered %d result(s) for %d '
+                                                 'parameter(s)' % (target,
+                                                                   len(response.results),
+                                                                   len(parameters))))
+        calls.call('set', SetParameters.Request(parameters=parameters), replied,
+                   lambda status, why: answer.set_exception(CameraError(
+                       status, '%s %s' % (target, why))))
+
+
+class StepParameters:
+    """
+    The parameters a processing node's step declares: read, followed and set over ROS.
+
+    follow(node) on every refresh names the node (None: none); its parameters whose descriptor
+    marks them a step's are read like the camera's controls. A node found to have none is
+    remembered (`without`), so that the panel looks further up the pipeline. Its methods run on
+    the executor's thread but describe(), which the HTTP threads call under the lock.
+    """
+
+    def __init__(self, node, lock: threading.Lock, timeout: float, reload_period: float,
+                 clock: Callable[[], float]):
+        self._node = node
+        self._lock = lock
+        self._timeout = timeout
+        self._reload_period = reload_period
+        self._clock = clock
+        self.without: set = set()   # nodes known to declare no step parameters
+        # Under the lock (the HTTP threads read them).
+        self.target: Optional[str] = None
+        self.step: Optional[str] = None
+        self.parameters: Dict[str, Dict[str, Any]] = {}  # name -> control_json()
+        self.loaded = False
+        self.problem = ''
+        self.namesakes = 1   # how many nodes in the graph bear the target's name
+        # The executor's thread only.
+        self.calls: Optional[_Calls] = None
+        self._generation = 0
+        self._loading = False
+        self._last_load = -math.inf
+
+    def describe(self) -> Optional[Dict[str, Any]]:
+        """Return GET /camera's `step` (None without a processing node); under the lock."""
+        if self.target is None:
+            return None
+        if self.namesakes > 1:
+            message = _namesakes_problem(self.target, self.namesakes)
+        elif self.problem:
+            message = self.problem
+        elif not self.loaded:
+            message = 'reading the step parameters of %s' % self.target
+        else:
+            message = ''
+        return {'node': self.target, 'step': self.step, 'message': message,
+                'parameters': {name: dict(p) for name, p in self.parameters.items()}}
+
+    def follow(self, target: Optional[str]) -> None:
+        """Show target's step parameters from now on; read them when due."""
+        if target != self.target:
+            if self.calls is not None:
+                self.calls.destroy('is no longer the processing node shown')
+            self.calls = _Calls(self._node, target, self._timeout) if target else None
+            self._generation += 1
+            self._loading = False
+            self._last_load = -math.inf
+            with self._lock:
+                self.target, self.step, self.parameters = target, None, {}
+                self.loaded, self.problem = False, ''
+        if self.calls is None:
+            return
+        self.calls.expire()
+        if not self._loading and self._clock() - self._last_load >= self._reload_period:
+            self._load()
+
+    def reload(self) -> None:
+        """Read the parameters again at the next refresh (a change may change them)."""
+        self._last_load = -math.inf
+
+    def _load(self):
+        calls, generation, target = self.calls, self._generation, self.target
+        if not all(calls.ready(key) for key in ('list', 'describe', 'get')):
+            return
+        self._loading = True
+        self._last_load = self._clock()
+
+        def current():
+            return generation == self._generation
+
+        def failed(status, why):
+            if current():
+                self._loading = False
+                with self._lock:
+                    self.problem = '%s %s' % (target, why)
+
+        def changed():
+            failed(503, 'changed its parameters while they were read; reading them again')
+
+        def got(descriptors, values):
+            parameters = {d.name: control_json(d, v) for d, v in zip(descriptors, values)}
+            self._loading = False
+            if not parameters:
+                self.without.add(target)   # look further up the pipeline at the next refresh
+            steps = [parse_step(d.additional_constraints).step for d in descriptors]
+            with self._lock:
+                self.parameters, self.step = parameters, steps[0] if steps else None
+                self.loaded, self.problem = True, ''
+
+        read_parameters(calls, lambda d: parse_step(d.additional_constraints) is not None,
+                        got, failed, changed, current)
+
+
 class CameraPanel:
-    """The camera of the node publishing `topic`: its controls, read and set over ROS."""
+    """
+    The camera of the node publishing `topic`: its controls, read and set over ROS.
+
+    runs_step: the panel's own node runs a processing step (vision_step's own viewer): its
+    step's parameters are the ones shown; otherwise those of the nearest processing node the
+    frames come through, if any.
+    """
 
     def __init__(self, node, topic: str, *, call_timeout: float = CALL_TIMEOUT_S,
                  refresh_period: float = REFRESH_PERIOD_S,
-                 reload_period: float = RELOAD_PERIOD_S, clock=time.monotonic):
+                 reload_period: float = RELOAD_PERIOD_S, clock=time.monotonic,
+                 runs_step: bool = False):
         self._node = node
         self._topic = topic
         self._own_name = self._full_name(node.get_namespace(), node.get_name())
@@ -247,6 +429,8 @@ class CameraPanel:
         self._short_reads = 0  # reads answered short in a row (parameters changing)
         self._without_controls = set()  # publishers known to have no camera controls
         self._via: List[str] = []
+        self._runs_step = runs_step
+        self._step = StepParameters(node, self._lock, call_timeout, reload_period, clock)
         self._jobs = collections.deque()
         self._wake = node.create_guard_condition(self._run_jobs)
         node.create_subscription(ParameterEvent, '/parameter_events', self._on_event,
@@ -265,6 +449,7 @@ class CameraPanel:
         """Return what the camera is and its controls (GET /camera)."""
         with self._lock:
             publisher, publishers, via = self._publisher, list(self._publishers), self._via
+            step = self._step.describe()
             namesakes = self._namesakes
             controls = {name: dict(c) for name, c in self._controls.items()}
             info, loaded, problem = dict(self._info), self._loaded, self._problem
@@ -306,7 +491,7 @@ class CameraPanel:
         }
         return {'topic': self._topic, 'publisher': publisher, 'via': via,
                 'publishers': publishers, 'message': message, 'camera': camera,
-                'controls': controls}
+                'controls': controls, 'step': step}
 
     def set_controls(self, values: Dict[str, Any]) -> Dict[str, Any]:
         """Set name: value on the publisher; return name: {applied, reason} (POST)."""
@@ -348,6 +533,44 @@ class CameraPanel:
                     self._controls[name]['value'] = python_value(parameter.value)
         return reply
 
+    def set_step_parameters(self, values: Dict[str, Any]) -> Dict[str, Any]:
+        """Set name: value on the processing node's step; return name: {applied, reason}."""
+        step = self._step
+        with self._lock:
+            target, loaded, parameters = step.target, step.loaded, dict(step.parameters)
+            namesakes = step.namesakes
+        if target is None:
+            raise CameraError(404, 'the frames shown come through no processing node with '
+                              'step parameters')
+        if namesakes > 1:
+            raise CameraError(409, _namesakes_problem(target, namesakes))
+        if not loaded:
+            raise CameraError(503, 'still reading the step parameters of %s; try again' %
+                              target)
+        unknown = sorted(name for name in values if name not in parameters)
+        if unknown:
+            raise CameraError(400, 'unknown step parameter%s %s; %s has: %s' % (
+                's' if len(unknown) > 1 else '', ', '.join(map(_json_text, unknown)),
+                target, ', '.join(parameters) or 'none'))
+        names = list(values)
+        messages = [ParameterMsg(name=name, value=parameter_value(
+            name, parameters[name], values[name])) for name in names]
+        answer = concurrent.futures.Future()
+        self._submit(lambda: send_set(step.calls if step.target == target else None, target,
+                                      messages, answer))
+        try:
+            results = answer.result(timeout=self._timeout + 1.0)
+        except concurrent.futures.TimeoutError:
+            raise CameraError(504, '%s did not answer within %g s' % (
+                target, self._timeout)) from None
+        reply = {}
+        with self._lock:
+            for name, message, result in zip(names, messages, results):
+                reply[name] = {'applied': bool(result.successful), 'reason': result.reason}
+                if result.successful and step.target == target and name in step.parameters:
+                    step.parameters[name]['value'] = python_value(message.value)
+        return reply
+
     def _submit(self, job):
         self._jobs.append(job)
         self._wake.trigger()
@@ -359,24 +582,8 @@ class CameraPanel:
             self._jobs.popleft()()
 
     def _send_set(self, publisher, parameters, answer):
-        calls = self._calls
-        if calls is None or self._publisher != publisher:
-            answer.set_exception(CameraError(503, '%s is gone' % publisher))
-        elif not calls.ready('set'):
-            answer.set_exception(CameraError(503, '%s does not offer its parameter services '
-                                             'now' % publisher))
-        else:
-            def replied(response):
-                if len(response.results) == len(parameters):
-                    answer.set_result(response.results)
-                else:
-                    answer.set_exception(CameraError(502, '%s answered %d result(s) for %d '
-                                                     'parameter(s)' % (publisher,
-                                                                       len(response.results),
-                                                                       len(parameters))))
-            calls.call('set', SetParameters.Request(parameters=parameters), replied,
-                       lambda status, why: answer.set_exception(CameraError(
-                           status, '%s %s' % (publisher, why))))
+        send_set(self._calls if self._publisher == publisher else None, publisher, parameters,
+                 answer)
 
     def _publishers_of(self, topic, *others):
         """Return the nodes publishing topic (a graph name), but this one and others."""
@@ -430,6 +637,14 @@ class CameraPanel:
             publisher = upstream
         with self._lock:
             self._via = via
+        # The step shown: the viewer's own node's, or the nearest processing node's.
+        candidates = ([self._own_name] if self._runs_step else []) + via
+        self._step.follow(next((name for name in candidates
+                                if name not in self._step.without), None))
+        nodes = self._node.get_node_names_and_namespaces()
+        with self._lock:
+            self._step.namesakes = sum(self._full_name(namespace, name) == self._step.target
+                                       for name, namespace in nodes)
         if publisher != self._publisher:
             if self._calls is not None:
                 self._calls.destroy('is no longer the camera of %s' % self._topic)
@@ -448,7 +663,7 @@ class CameraPanel:
             # Nodes that share a name share its parameter services: what the panel reads may
             # come from either, and a change reaches both.
             namesakes = sum(self._full_name(namespace, name) == publisher
-                            for name, namespace in self._node.get_node_names_and_namespaces())
+                            for name, namespace in nodes)
         with self._lock:
             self._publishers = publishers
             if namesakes > 1 and self._namesakes <= 1:
@@ -479,40 +694,20 @@ class CameraPanel:
                     self._problem = '%s %s' % (self._publisher, why)
 
         def changed():
-            # rclpy answers a describe or a get with nothing at all when one of the names is
-            # not declared any more: the node's parameters changed under the read. That says
-            # nothing about its controls: read them all again at the next refresh.
+            # That says nothing about its controls: read them all again at the next refresh.
             failed(503, 'changed its parameters while they were read; reading them again')
             self._short_reads += 1
             if self._short_reads < SHORT_READS_RETRIED:
                 self._last_load = -math.inf   # at the next refresh; then at the reload period
 
-        def listed(response):
-            if current():
-                names = list(response.result.names)
-                calls.call('describe', DescribeParameters.Request(names=names),
-                           lambda reply: described(names, reply), failed)
+        def wanted(descriptor):
+            return (descriptor.name in INFO_PARAMETERS or
+                    is_control(descriptor.additional_constraints) or
+                    descriptor.name in STREAM_SETTINGS)
 
-        def described(names, response):
-            if not current():
-                return
-            if len(response.descriptors) != len(names):
-                changed()
-                return
-            wanted = [d for d in response.descriptors if d.name in INFO_PARAMETERS or
-                      is_control(d.additional_constraints) or
-                      d.name in STREAM_SETTINGS]
-            calls.call('get', GetParameters.Request(names=[d.name for d in wanted]),
-                       lambda reply: got(wanted, reply), failed)
-
-        def got(descriptors, response):
-            if not current():
-                return
-            if len(response.values) != len(descriptors):
-                changed()
-                return
+        def got(descriptors, values):
             controls, info = {}, {}
-            for descriptor, value in zip(descriptors, response.values):
+            for descriptor, value in zip(descriptors, values):
                 control = control_json(descriptor, value)
                 if control is not None:
                     controls[descriptor.name] = control
@@ -530,10 +725,12 @@ class CameraPanel:
                 self._controls, self._info = ordered, info
                 self._loaded, self._problem = True, ''
 
-        calls.call('list', ListParameters.Request(), listed, failed)
+        read_parameters(calls, wanted, got, failed, changed, current)
 
     def _on_event(self, event):
-        """Apply a parameter change of the publisher (made here or anywhere else)."""
+        """Apply a parameter change of the publisher or the step (made here or elsewhere)."""
+        if event.node == self._step.target:
+            self._on_step_event(event)
         if event.node != self._publisher:
             return
         reload = False
@@ -553,6 +750,18 @@ class CameraPanel:
             reload = reload or bool(event.changed_parameters) or bool(event.deleted_parameters)
         if reload:
             self._last_load = -math.inf
+
+    def _on_step_event(self, event):
+        step = self._step
+        with self._lock:
+            for parameter in list(event.new_parameters) + list(event.changed_parameters):
+                shown = step.parameters.get(parameter.name)
+                if shown is not None:
+                    shown['value'] = python_value(parameter.value)
+                    if shown['type'] is None:
+                        shown['type'] = _TYPE_NAMES.get(parameter.value.type)
+        if event.new_parameters or event.deleted_parameters:
+            step.reload()
 
     def _on_diagnostics(self, message):
         if self._publisher is None:

@@ -136,18 +136,19 @@ class Display:
                 raise ConfigError(str(error))
             self.viewer = viewer
 
-    def attach(self, node, stats, topic, camera_topic=None):
+    def attach(self, node, stats, topic, camera_topic=None, runs_step=False):
         """
         Start the node's timers: the viewer's statistics of topic, the window's events.
 
-        With camera_topic, the viewer's camera panel shows the camera of the node publishing it.
+        With camera_topic, the viewer's camera panel shows the camera of the node publishing it;
+        runs_step: and the node's own step's parameters (it runs a processing step).
         """
         if self.viewer is not None:
             node.create_timer(WEB_STATS_PERIOD_S, lambda: self.viewer.set_stats(
                 dict(stats.snapshot(), topic=topic)))
             if camera_topic is not None:
                 from py_vision.viewer.camera_panel import CameraPanel
-                self.viewer.set_camera(CameraPanel(node, camera_topic))
+                self.viewer.set_camera(CameraPanel(node, camera_topic, runs_step=runs_step))
             # Once the page is complete.
             if self.viewer.token:
                 self._say_url_with_token()

@@ -369,19 +369,25 @@ class _Handler(BaseHTTPRequestHandler):
             self._fail(error.status, str(error))
 
     def serve_controls(self, route):
+        self._serve_set(self.server.viewer.set_controls, 'the controls')
+
+    def serve_step(self, route):
+        self._serve_set(self.server.viewer.set_step_parameters, 'the step parameters')
+
+    def _serve_set(self, setter, what):
         viewer = self.server.viewer
         values = self._json_body()
         if values is None:
             return
         try:
-            results = viewer.set_controls(values)
+            results = setter(values)
         except CameraError as error:
             self._fail(error.status, str(error))
             return
         except Exception as error:  # a defect: say so, and keep serving
-            viewer.log.error('camera', 'viewer: setting controls failed: %s: %s' % (
-                type(error).__name__, error))
-            self._fail(500, 'setting the controls failed: %s' % type(error).__name__)
+            viewer.log.error('camera', 'viewer: setting %s failed: %s: %s' % (
+                what, type(error).__name__, error))
+            self._fail(500, 'setting %s failed: %s' % (what, type(error).__name__))
             return
         self._send_json(200, {'results': results})
 
@@ -585,6 +591,9 @@ ROUTES: Dict[str, Route] = {
     '/camera/controls': Route(('POST',), _Handler.serve_controls,
                               'a JSON object of control name: value to set; per-control '
                               'answer'),
+    '/camera/step': Route(('POST',), _Handler.serve_step,
+                          "a JSON object of the processing step's parameter name: value to "
+                          'set; per-parameter answer (404 without a processing node)'),
 }
 
 
@@ -676,7 +685,7 @@ class WebViewer:
         return self.access.cookie_name
 
     def set_camera(self, camera: Optional[CameraAccess]):
-        """Serve /camera and /camera/controls from camera (None: 404, no panel on the page)."""
+        """Serve /camera, /camera/controls and /camera/step from camera (None: 404, no panel)."""
         self._camera = camera
 
     def camera_state(self):
@@ -699,6 +708,13 @@ class WebViewer:
         if camera is None:
             raise CameraError(404, 'this viewer has no camera panel')
         return camera.set_controls(values)
+
+    def set_step_parameters(self, values):
+        """Apply POST /camera/step; return name: {applied, reason}."""
+        camera = self._camera
+        if camera is None:
+            raise CameraError(404, 'this viewer has no camera panel')
+        return camera.set_step_parameters(values)
 
     def submit(self, image):
         """

@@ -182,3 +182,31 @@ def test_controls_named_as_javascript_object_properties_work(launch, peer, brows
     finally:
         peer.executor.remove_node(node)
         node.destroy_node()
+
+
+def test_the_panel_shows_and_sets_the_processing_step_s_parameters(launch, peer, browser):
+    # cv_bridge_test's own viewer: the camera's controls, and below them its step's parameter.
+    from param_client import describe_parameters, get_parameters
+    launch('usbcam_publisher', params={'video_device': 'synthetic', 'framerate': 15.0})
+    processing = launch('cv_bridge_test', params={'display': 'web', 'web_port': 0})
+    url = processing.wait_for_output(URL_LINE).group(1)
+    page = browser.new_page()
+    page.goto(url, wait_until='domcontentloaded')
+    slider = page.locator('#input-step-simulated_work_ms')
+    slider.wait_for(state='visible', timeout=30000)
+    page.locator('#input-brightness').wait_for(state='visible', timeout=30000)
+    assert page.locator('#step-title').inner_text() == 'step circle on /cv_bridge_test'
+    bounds = describe_parameters(peer, 'cv_bridge_test', ['simulated_work_ms'])[0] \
+        .floating_point_range[0]
+    assert (float(slider.get_attribute('min')), float(slider.get_attribute('max'))) == (
+        bounds.from_value, bounds.to_value)
+    assert page.locator('#step .control').count() == 1
+
+    slider.evaluate('e => { e.value = "20"; e.dispatchEvent(new Event("input")); }')
+    wait_until(lambda: get_parameters(peer, 'cv_bridge_test', ['simulated_work_ms'])[0]
+               .double_value == 20.0, 10, interval=0.1,
+               what='simulated_work_ms 20 on cv_bridge_test')
+    wait_until(lambda: page.locator('#control-step-simulated_work_ms .value').inner_text() ==
+               '20', 10, interval=0.1, what='the page to show the step parameter at 20')
+    assert page.locator('#control-step-simulated_work_ms .note').inner_text() == ''
+    assert processing.proc.poll() is None and 'Traceback' not in processing.output()

@@ -17,11 +17,13 @@ The camera panel's API end to end: a real usbcam_publisher and the viewer of a s
 
 What GET /camera shows is checked against what the publisher itself says through its
 parameter services (the expected ranges come from its descriptors, never from this file), and
-what POST /camera/controls does is checked there too.
+what POST /camera/controls does is checked there too. The same for a processing node's step
+parameters (GET /camera's `step`, POST /camera/step), with a user's own step.
 """
 
 import http.client
 import json
+import os
 import re
 
 from fake_clock import FakeClock
@@ -49,9 +51,9 @@ def call(port, method, path, body=None, headers=None, timeout=10.0):
         connection.close()
 
 
-def post(port, values, headers=None):
+def post(port, values, headers=None, path='/camera/controls'):
     body = values if isinstance(values, bytes) else json.dumps(values).encode()
-    return call(port, 'POST', '/camera/controls', body,
+    return call(port, 'POST', path, body,
                 dict({'Content-Type': 'application/json'}, **(headers or {})))
 
 
@@ -93,6 +95,7 @@ def test_the_api_shows_and_sets_the_publishers_controls(launch, peer):
     assert state['publisher'] == '/' + PUBLISHER
     assert state['topic'] == '/usb_camera/image'
     assert state['camera']['device'] == 'synthetic'
+    assert state['step'] is None, 'no processing node between the camera and the viewer'
     wait_until(lambda: camera(port)['shown'].get('size') == '640x480', 15, interval=0.2,
                what='the size of the frames shown')
 
@@ -343,6 +346,29 @@ def test_controls_are_read_from_descriptors_as_the_contract_writes_them():
     assert parse_menu('Power Line Frequency; menu: 0=Disabled; 1=50 Hz; 2=60 Hz') == [
         {'value': 0, 'label': 'Disabled'}, {'value': 1, 'label': '50 Hz'},
         {'value': 2, 'label': '60 Hz'}]
+
+
+def test_a_step_parameter_is_read_from_its_descriptor_as_vision_step_marks_it():
+    # What vision_step declares for a step's Spec (marked) maps to a typed panel entry.
+    from py_vision.params import Spec
+    from py_vision.viewer.camera_panel import control_json
+    from py_vision.vision_step import marked
+
+    gain = marked(Spec('gain', 1.0, 'how bright', (0.0, 4.0), live=True), 'mine:Step')
+    shown = control_json(gain.descriptor(), ros_value(1.5))
+    assert shown == {
+        'type': 'double', 'value': 1.5, 'min': 0.0, 'max': 4.0, 'step': 0.0, 'menu': None,
+        'read_only': False, 'live': True, 'group': 'step', 'description': 'how bright',
+        'alias_of': None, 'inactive': None, 'button': False}
+    label = marked(Spec('label', 'inv', 'its name', choices=('inv', 'neg or not')), 'mine:Step')
+    shown = control_json(label.descriptor(), ros_value('inv'))
+    assert (shown['type'], shown['read_only'], shown['group']) == ('string', True, 'step')
+    assert shown['menu'] == [{'value': 'inv', 'label': 'inv'},
+                             {'value': 'neg or not', 'label': 'neg or not'}]
+    topic = marked(Spec('topic', '/t', 'where', check=bool, accepted='a topic name'), 'mine:Step')
+    assert topic.descriptor().additional_constraints == (
+        'step parameter of mine:Step; accepts a topic name')
+    assert control_json(topic.descriptor(), ros_value('/t'))['menu'] is None
 
 
 def test_a_value_of_the_wrong_type_is_refused_before_it_reaches_the_node():
@@ -733,3 +759,165 @@ def test_a_string_that_is_not_text_is_refused_and_the_viewer_lives(launch, peer)
     finally:
         peer.executor.remove_node(node)
         node.destroy_node()
+
+
+PANEL_STEPS = """
+from py_vision.params import Spec
+from py_vision.steps.api import Step
+
+
+class Tunable(Step):
+    PARAMETERS = (
+        Spec('gain', 1.0, 'how bright the output is', (0.0, 4.0), live=True),
+        Spec('size', 4, 'an even size', (0, 100), live=True),
+        Spec('mode', 'fast', 'how it works', choices=('fast', 'exact'), live=True),
+        Spec('label', 'inv', 'what it calls itself', choices=('inv', 'neg')),
+    )
+
+    def start(self, context):
+        self.logger = context.logger
+
+    def parameters_changed(self, changes):
+        if changes.get('size', 0) % 2:
+            return 'size must be even'
+        self.logger.info('step now has %r' % (changes,))
+
+    def process(self, image, header):
+        return image
+"""
+
+
+def step_env(ros_env, folder):
+    """Return the node environment with the panel test's own step module on PYTHONPATH."""
+    (folder / 'panel_steps.py').write_text(PANEL_STEPS)
+    path = os.pathsep.join(p for p in (str(folder), ros_env.get('PYTHONPATH', '')) if p)
+    return dict(ros_env, PYTHONPATH=path)
+
+
+def step_state(port):
+    """Return GET /camera's step once its parameters are read, else None."""
+    step = camera(port)['step']
+    return step if step and step['parameters'] else None
+
+
+def test_a_processing_node_s_step_parameters_are_shown_and_set(
+        launch, peer, ros_env, tmp_path):
+    from param_client import _call
+    launch('usbcam_publisher', params={'video_device': 'synthetic', 'framerate': 15.0})
+    processing = launch('vision_step', params={
+        'step': 'panel_steps:Tunable', 'display': 'web', 'web_port': 0},
+        env=step_env(ros_env, tmp_path))
+    own_port = int(processing.wait_for_output(URL_LINE).group(1))
+    viewer = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0},
+                    remaps={'usb_camera/image': 'vision_step/image'}, name='viewer')
+    port = int(viewer.wait_for_output(URL_LINE).group(1))
+
+    step = wait_until(lambda: step_state(port), 30, interval=0.2,
+                      what="vision_step's step parameters in GET /camera")
+    assert (step['node'], step['step'], step['message']) == (
+        '/vision_step', 'panel_steps:Tunable', '')
+    # The step's parameters and nothing else of the node, as its descriptors say.
+    names = _call(peer, 'vision_step', ListParameters, 'list_parameters',
+                  ListParameters.Request()).result.names
+    marked = {d.name: d for d in describe_parameters(peer, 'vision_step', names)
+              if d.additional_constraints.startswith('step parameter of ')}
+    assert set(marked) == {'gain', 'size', 'mode', 'label'} == set(step['parameters'])
+    for name, descriptor in marked.items():
+        assert step['parameters'][name]['read_only'] == descriptor.read_only, name
+    gain, size = step['parameters']['gain'], step['parameters']['size']
+    assert (gain['type'], gain['min'], gain['max'], gain['value']) == ('double', 0.0, 4.0, 1.0)
+    assert (size['type'], size['min'], size['max'], size['step']) == ('integer', 0, 100, 1)
+    assert [m['value'] for m in step['parameters']['mode']['menu']] == ['fast', 'exact']
+    assert step['parameters']['label']['read_only'] is True
+    # The camera's controls are still the camera's, upstream.
+    state = wait_until(lambda: (lambda s: s if s['controls'] else None)(camera(port)), 30,
+                       interval=0.2, what='the camera controls behind vision_step')
+    assert state['publisher'] == '/usbcam_publisher' and state['via'] == ['/vision_step']
+    # The synthetic camera has a gain too: each keeps its own, neither list takes the other's.
+    assert state['controls']['gain']['group'] == 'camera'
+    assert 'mode' not in state['controls'] and 'brightness' not in step['parameters']
+
+    # A change in the panel reaches the step.
+    status, _, answer = post(port, {'gain': 2.5, 'mode': 'exact'}, path='/camera/step')
+    assert status == 200, answer
+    assert answer['results'] == {'gain': {'applied': True, 'reason': ''},
+                                 'mode': {'applied': True, 'reason': ''}}
+    processing.wait_for_output(r"step now has \{'gain': 2\.5\}")
+    processing.wait_for_output(r"step now has \{'mode': 'exact'\}")
+    assert [value_of(v) for v in get_parameters(peer, 'vision_step', ['gain', 'mode'])] == [
+        2.5, 'exact']
+    assert camera(port)['step']['parameters']['gain']['value'] == 2.5
+
+    # Refused, each with the node's reason: out of range, by the step, read-only.
+    status, _, answer = post(port, {'gain': 9.0, 'size': 3, 'label': 'neg'},
+                             path='/camera/step')
+    assert status == 200, answer
+    results = answer['results']
+    assert not any(r['applied'] for r in results.values()), results
+    assert results['gain']['reason'] == set_parameter(peer, 'vision_step', 'gain', 9.0).reason
+    assert 'size must be even' in results['size']['reason']
+    assert results['label']['reason'] and results['label']['reason'] == set_parameter(
+        peer, 'vision_step', 'label', 'neg').reason
+    assert [value_of(v) for v in get_parameters(peer, 'vision_step', ['gain', 'size'])] == [
+        2.5, 4]
+    # Not one of its step's parameters, or of the wrong type: refused before the node.
+    for bad in ({'jpeg_quality': 50}, {'brightness': 1}, {'gain': 'bright'}):
+        status, _, answer = post(port, bad, path='/camera/step')
+        assert status == 400 and answer['error'], (bad, answer)
+
+    # A change made elsewhere shows.
+    assert set_parameter(peer, 'vision_step', 'size', 8).successful
+    wait_until(lambda: camera(port)['step']['parameters']['size']['value'] == 8, 10,
+               interval=0.1, what='the size set elsewhere in GET /camera')
+
+    # vision_step's own viewer shows its own step, and sets it through the same services.
+    own = wait_until(lambda: step_state(own_port), 30, interval=0.2,
+                     what="the step parameters in vision_step's own viewer")
+    assert own['node'] == '/vision_step' and set(own['parameters']) == set(marked)
+    status, _, answer = post(own_port, {'gain': 0.5}, path='/camera/step')
+    assert status == 200 and answer['results']['gain']['applied'], answer
+    processing.wait_for_output(r"step now has \{'gain': 0\.5\}")
+    assert camera(own_port)['controls'], 'its own viewer shows the camera upstream too'
+    for node in (viewer, processing):
+        assert 'Traceback' not in node.output()
+
+
+def test_without_a_processing_node_a_step_change_is_a_404(launch):
+    launch('usbcam_publisher', params={'video_device': 'synthetic', 'framerate': 15.0})
+    subscriber, port, _ = start_viewer(launch)
+    wait_until(lambda: camera(port)['controls'], 30, interval=0.2,
+               what='the controls in GET /camera')
+    status, _, answer = post(port, {'gain': 1.0}, path='/camera/step')
+    assert status == 404 and 'no processing node' in answer['error'], answer
+
+
+def test_two_nodes_with_the_step_node_s_name_are_said_and_not_changed():
+    # As for the camera's node: two nodes of one name share its parameter services.
+    from types import SimpleNamespace
+    from py_vision.control_descriptor import step_constraints
+    from py_vision.viewer.camera_access import CameraError
+    from py_vision.viewer.camera_panel import CameraPanel
+    node = GraphNode()
+    node.answers = {
+        'list_parameters': lambda request: SimpleNamespace(
+            result=SimpleNamespace(names=['gain'])),
+        'describe_parameters': lambda request: SimpleNamespace(descriptors=[descriptor(
+            'gain', type=3, additional_constraints=step_constraints('mine:Step'))]),
+        'get_parameters': lambda request: SimpleNamespace(values=[ros_value(1.0)])}
+    panel = CameraPanel(node, '/usb_camera/image', runs_step=True)
+    node.infos = [node_info('usbcam_publisher'), node_info('usbcam_subscriber')]
+    panel._refresh()
+    step = panel.describe()['step']
+    assert (step['node'], step['step'], step['message']) == (
+        '/usbcam_subscriber', 'mine:Step', '')
+    assert step['parameters']['gain']['value'] == 1.0
+    node.infos.append(node_info('usbcam_subscriber'))
+    panel._refresh()
+    assert '2 nodes are named /usbcam_subscriber' in panel.describe()['step']['message']
+    try:
+        panel.set_step_parameters({'gain': 2.0})
+    except CameraError as error:
+        assert error.status == 409 and 'give each its own name' in str(error)
+    else:
+        raise AssertionError('a change reaching two nodes was sent')
+    assert not any(service == 'set_parameters' for service, _, _ in node.sent)

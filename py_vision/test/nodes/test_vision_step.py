@@ -171,7 +171,9 @@ def test_a_users_step_processes_publishes_and_takes_its_parameters(launch, peer,
     assert not gain.read_only and gain.description == 'how bright the inverted image is'
     assert (gain.floating_point_range[0].from_value,
             gain.floating_point_range[0].to_value) == (0.0, 4.0)
-    assert label.read_only and label.additional_constraints == 'inv or neg'
+    # Marked as the step's (the viewer's panel lists them), with the choices.
+    assert label.read_only and label.additional_constraints == (
+        'step parameter of user_steps:Invert; one of: inv | neg')
     # A live change reaches it; a value out of range does not.
     assert set_parameter(peer, 'vision_step', 'gain', 3.0).successful
     probe.send(image, 4, 'frame_4')

@@ -180,17 +180,26 @@
   // (a change made elsewhere shows within a second); a change is sent at once, and while a
   // slider moves at most one request per control is on its way. Controls are keyed by the
   // names the camera's node gives them, in Maps: a control may be called "constructor" or
-  // "__proto__", which a plain object would take for its own machinery.
+  // "__proto__", which a plain object would take for its own machinery. The parameters of the
+  // processing node's step (GET /camera's "step") are shown below in the same way, keyed
+  // "step-" + name (no ROS name has a "-"), and set through POST /camera/step.
   const panel = document.getElementById("panel");
   const controlsBox = document.getElementById("controls");
+  const stepBox = document.getElementById("step");
+  const stepParameters = document.getElementById("step-parameters");
+  const CAMERA = { prefix: "", route: "/camera/controls" };
+  const STEP = { prefix: "step-", route: "/camera/step" };
   let layout = null;
-  const widgets = new Map();   // name: the control's elements
-  const held = new Set();      // names of the controls the user is moving now
-  const queued = new Map();    // name: the value to send next
-  const sending = new Set();   // names with a request on its way
+  let stepLayout = null;
+  const widgets = new Map();   // key: the control's elements
+  const held = new Set();      // keys of the controls the user is moving now
+  const queued = new Map();    // key: the value to send next
+  const sending = new Set();   // keys with a request on its way
 
   function describeValue(c, value) {
-    if (value === null || value === undefined) { return "camera\u2019s own value"; }
+    if (value === null || value === undefined) {
+      return c.group === "step" ? "not set" : "camera\u2019s own value";
+    }
     if (c.menu) {
       const entry = c.menu.find(function (m) { return m.value === value; });
       return entry ? entry.label : String(value);
@@ -199,10 +208,11 @@
     return String(value);
   }
 
-  function makeControl(name, c) {
+  function makeControl(name, c, where) {
+    const key = where.prefix + name;
     const box = document.createElement("div");
     box.className = "control";
-    box.id = "control-" + name;
+    box.id = "control-" + key;
     const label = document.createElement("label");
     label.textContent = name.replace(/_/g, " ");
     label.title = c.description || "";
@@ -219,7 +229,7 @@
       input = document.createElement("select");
       const own = document.createElement("option");
       own.value = "";
-      own.textContent = "camera\u2019s own value";
+      own.textContent = describeValue(c, null);
       own.disabled = true;
       input.appendChild(own);
       c.menu.forEach(function (m) {
@@ -250,8 +260,8 @@
     }
     input.name = name;
     input.disabled = c.read_only;
-    label.htmlFor = input.id = "input-" + name;
-    input.addEventListener("pointerdown", function () { held.add(name); });
+    label.htmlFor = input.id = "input-" + key;
+    input.addEventListener("pointerdown", function () { held.add(key); });
     const changed = c.button ? "click" : (input.type === "range" ? "input" : "change");
     input.addEventListener(changed, function () {
       let v;
@@ -261,10 +271,10 @@
       else if (c.type === "double") { v = parseFloat(input.value); }
       else { v = input.value; }
       value.textContent = describeValue(c, v);
-      send(name, v);
+      send(key, name, v, where.route);
     });
     ["change", "pointerup", "pointercancel"].forEach(function (event) {
-      input.addEventListener(event, function () { held.delete(name); });
+      input.addEventListener(event, function () { held.delete(key); });
     });
     if (input.type === "checkbox") {
       value.appendChild(document.createTextNode(""));
@@ -275,18 +285,19 @@
     } else {
       box.append(label, value, input, why, note);
     }
-    widgets.set(name, { box: box, input: input, value: value, note: note, why: why, spec: c });
+    widgets.set(key, { box: box, input: input, value: value, note: note, why: why, spec: c });
     return box;
   }
 
-  function showValue(name, c) {
-    const w = widgets.get(name);
+  function showValue(key, c) {
+    const w = widgets.get(key);
     w.spec = c;
     w.box.classList.toggle("unset", c.value === null);
     w.box.classList.toggle("inactive", Boolean(c.inactive));
-    w.why.textContent = c.inactive ? "inactive " + c.inactive : "";
+    w.why.textContent = c.inactive ? "inactive " + c.inactive
+      : (c.read_only && c.group === "step" ? "read-only: set when the node starts" : "");
     w.value.textContent = describeValue(c, c.value);
-    if (held.has(name) || queued.has(name)) { return; }
+    if (held.has(key) || queued.has(key)) { return; }
     if (w.input.type === "checkbox") {
       w.input.indeterminate = c.value === null;
       w.input.checked = c.value === true;
@@ -319,13 +330,11 @@
     all.forEach(function (c, n) {
       if (!(c.alias_of && all.has(c.alias_of))) { controls.set(n, c); }
     });
-    const key = JSON.stringify(Array.from(controls, function ([n, c]) {
-      return [n, c.type, c.min, c.max, c.step, c.menu, c.read_only, c.group, c.button];
-    }));
+    const key = layoutKey(controls);
     if (key !== layout) {
       layout = key;
       controlsBox.textContent = "";
-      widgets.clear();
+      forget(CAMERA);
       let group = null;
       controls.forEach(function (c, n) {
         if (c.group !== group) {
@@ -334,23 +343,57 @@
           h.textContent = group === "stream" ? "stream settings" : "controls";
           controlsBox.appendChild(h);
         }
-        controlsBox.appendChild(makeControl(n, c));
+        controlsBox.appendChild(makeControl(n, c, CAMERA));
       });
     }
     controls.forEach(function (c, n) { showValue(n, c); });
+    renderStep(cam.step);
   }
 
-  async function send(name, v) {
-    queued.set(name, v);
-    if (sending.has(name)) { return; }
-    sending.add(name);
-    const w = widgets.get(name);
-    while (queued.has(name)) {
+  // What decides the widgets: when it changes, they are made again.
+  function layoutKey(controls) {
+    return JSON.stringify(Array.from(controls, function ([n, c]) {
+      return [n, c.type, c.min, c.max, c.step, c.menu, c.read_only, c.group, c.button];
+    }));
+  }
+
+  function forget(where) {
+    Array.from(widgets.keys()).forEach(function (key) {
+      const isStep = key.startsWith(STEP.prefix);
+      if (isStep === (where === STEP)) { widgets.delete(key); }
+    });
+  }
+
+  // The step of the processing node the frames come through (or this viewer's own node's).
+  function renderStep(step) {
+    stepBox.hidden = !step;
+    if (!step) { return; }
+    show("step-title", "step " + (step.step || "") + " on " + step.node);
+    show("step-message", step.message || "");
+    const parameters = new Map(Object.entries(step.parameters || {}));
+    const key = layoutKey(parameters);
+    if (key !== stepLayout) {
+      stepLayout = key;
+      stepParameters.textContent = "";
+      forget(STEP);
+      parameters.forEach(function (c, n) {
+        stepParameters.appendChild(makeControl(n, c, STEP));
+      });
+    }
+    parameters.forEach(function (c, n) { showValue(STEP.prefix + n, c); });
+  }
+
+  async function send(key, name, v, route) {
+    queued.set(key, v);
+    if (sending.has(key)) { return; }
+    sending.add(key);
+    const w = widgets.get(key);
+    while (queued.has(key)) {
       // fromEntries makes an own property of any name ("__proto__" too).
-      const body = JSON.stringify(Object.fromEntries([[name, queued.get(name)]]));
-      queued.delete(name);
+      const body = JSON.stringify(Object.fromEntries([[name, queued.get(key)]]));
+      queued.delete(key);
       try {
-        const response = await fetch("/camera/controls", {
+        const response = await fetch(route, {
           method: "POST", cache: "no-store", body: body,
           headers: { "Content-Type": "application/json" } });
         const answer = await response.json();
@@ -361,7 +404,7 @@
         if (w) { w.note.textContent = "not sent: the viewer does not answer"; }
       }
     }
-    sending.delete(name);
+    sending.delete(key);
   }
 
   async function pollCamera() {
