@@ -142,6 +142,11 @@ status=0
 # -rs: each skipped test is listed with its reason at the end, and --durations the slowest
 # tests with their times, which say where a run's time goes (in every run).
 report=(-rs --durations=15)
+# Two pytest-xdist workers (PY_VISION_TEST_WORKERS: another number, 0 for none): most tests
+# wait on nodes, DDS and the VM, so two at once on two cores take about half the time. The
+# harness keeps them apart (docs/tests.md#running-in-parallel-and-the-time-it-takes), and
+# conftest.py's scheduler gives the vivid VM's tests to one worker, so the VM boots once.
+report+=(-n "${PY_VISION_TEST_WORKERS:-2}" --dist load)
 workspace_test "$root/.venv/bin/colcon" 'main run' "${report[@]}" "$@" || status=$?
 check_ran_tests "$status" 'main run (py_vision)' "$@" || exit 1
 status=0
