@@ -49,6 +49,10 @@ os.environ['ROS_LOG_DIR'] = _SESSION_ROS_LOG_DIR
 # kernel's answers do not depend on the Python side's versions). Left out, not skipped:
 # nothing claims they ran.
 LEFT_OUT_BY = {'PY_VISION_BROWSER': 'browser', 'PY_VISION_VIVID': 'vivid_session'}
+# The same for the tests with a marker: PY_VISION_LINTERS=off leaves out the linters, whose
+# answer is about the files, the same whatever Python, numpy, OpenCV or ROS runs them (the
+# board-version run; docs/tests.md says why).
+LEFT_OUT_MARKED = {'PY_VISION_LINTERS': 'linter'}
 # Under pytest-xdist (scripts/test.sh: -n 2 --dist load) a session-scoped fixture is
 # made once per worker: the vivid VM's tests are all given to one worker, so the VM boots once
 # in the run. The scheduler (below) tells them by their files' names, and a test of the VM in
@@ -70,6 +74,13 @@ def pytest_collection_modifyitems(config, items):
         if os.environ.get(variable) != 'off':
             continue
         left_out = [item for item in items if _uses(item, fixture)]
+        if left_out:
+            config.hook.pytest_deselected(items=left_out)
+            items[:] = [item for item in items if item not in left_out]
+    for variable, marker in LEFT_OUT_MARKED.items():
+        if os.environ.get(variable) != 'off':
+            continue
+        left_out = [item for item in items if item.get_closest_marker(marker)]
         if left_out:
             config.hook.pytest_deselected(items=left_out)
             items[:] = [item for item in items if item not in left_out]
