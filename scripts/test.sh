@@ -1,11 +1,14 @@
 #!/usr/bin/env bash
-# Set everything up (scripts/setup.sh --test) and run the whole test suite against the
-# colcon-installed package; if it passes, run every test that needs no browser again on the
-# boards' software: Python 3.10, numpy 1.23.3, OpenCV 4.6.0 and their ROS 2 Humble (from
-# ../shared/humble), against its own build (.venv-board, scripts/setup.sh --board). Without a
-# Python 3.10 or that Humble that second run is skipped, with the reason, on a developer's PC;
-# in CI (CI=true) it is required, so that is a failure.
-# Extra arguments go to pytest, in both runs (e.g. -k bridge, -x).
+# Set everything up (scripts/setup.sh --test) and run the tests: the package's own where the
+# package alone is, as a ROS user runs them (a copy of py_vision/ in a new colcon workspace,
+# `colcon build`, `colcon test`, `colcon test-result`), then the repository's (tests/: its docs
+# against the code and the lint of its tools; petalinux/test). If they pass, the package's
+# tests that need no browser run again on the boards' software: Python 3.10, numpy 1.23.3,
+# OpenCV 4.6.0 and their ROS 2 Humble (from ../shared/humble, set up by scripts/setup.sh
+# --board in .venv-board), again with colcon in a plain workspace. Without a Python 3.10 or
+# that Humble that second run is skipped, with the reason, on a developer's PC; in CI (CI=true)
+# it is required, so that is a failure.
+# Extra arguments go to pytest, in every run (e.g. -k bridge, -x).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 bash "$root/scripts/setup.sh" --test
@@ -139,24 +142,61 @@ check_ran_tests() {
   return "$status"
 }
 
+# The plain workspaces are made in here, removed when the script ends.
+scratch=$(mktemp -d "${TMPDIR:-/tmp}/py_vision_test.XXXXXX")
+trap 'rm -rf "$scratch"' EXIT
+
+# Run the package's tests as a ROS user does, where the package alone is (docs/ros.md): a copy
+# of py_vision/ in a new workspace's src/ (a temporary directory, nothing of the checkout
+# around it: a package test that reads outside py_vision/ fails here), `colcon build`, `colcon
+# test` with the arguments given to pytest, and `colcon test-result --verbose`. In the current
+# environment less PY_VISION_INSTALL: the tests find the workspace's install as `colcon test`
+# gives it to them. Status 5 when pytest ran no test.
+# Usage: workspace_test COLCON RUN PYTEST_ARGS...
+workspace_test() {
+  local colcon=$1 run=$2 ws status=0 summary
+  shift 2
+  ws=$(mktemp -d "$scratch/workspace.XXXXXX")
+  mkdir "$ws/src"
+  tar -C "$root" --exclude=__pycache__ --exclude=.pytest_cache --exclude=.hypothesis -cf - \
+    py_vision | tar -C "$ws/src" -xf -
+  echo "[test] $run: colcon build and colcon test of py_vision alone, in $ws"
+  (cd "$ws" && env -u PY_VISION_INSTALL "$colcon" build >build.log 2>&1) \
+    || { cat "$ws/build.log" >&2; echo "[test] $run: colcon build failed" >&2; return 1; }
+  (cd "$ws" && env -u PY_VISION_INSTALL "$colcon" test --event-handlers console_direct+ \
+    --pytest-args "$@") || status=$?
+  [ "$status" = 0 ] || { echo "[test] $run: colcon test failed ($status)" >&2; return 1; }
+  summary=$(cd "$ws" && "$colcon" test-result --verbose) || status=$?
+  echo "$summary"
+  # 'Summary: 1471 tests, 0 errors, 1 failures, 3 skipped'
+  if grep -q '^Summary: 0 tests' <<<"$summary"; then
+    return 5
+  fi
+  return "$status"
+}
+
 status=0
 # -rs: each skipped test is listed with its reason at the end, and --durations the slowest
-# tests with their times, which say where a run's time goes (in both runs).
+# tests with their times, which say where a run's time goes (in every run).
 report=(-rs --durations=15)
-.venv/bin/python -m pytest py_vision/test petalinux/test -p no:cacheprovider "${report[@]}" "$@" \
+# Two pytest-xdist workers (PY_VISION_TEST_WORKERS: another number, 0 for none): most tests
+# wait on nodes, DDS and the VM, so two at once on two cores take about half the time. The
+# harness keeps them apart (docs/tests.md#running-in-parallel-and-the-time-it-takes), and
+# conftest.py's scheduler gives the vivid VM's tests to one worker, so the VM boots once.
+report+=(-n "${PY_VISION_TEST_WORKERS:-2}" --dist load)
+workspace_test "$root/.venv/bin/colcon" 'main run' "${report[@]}" "$@" || status=$?
+check_ran_tests "$status" 'main run (py_vision)' "$@" || exit 1
+status=0
+.venv/bin/python -m pytest tests petalinux/test -p no:cacheprovider "${report[@]}" "$@" \
   || status=$?
-if [ "$status" = 5 ]; then
-  echo '[test] pytest collected no tests: that is a failure' >&2
-  exit 1
-fi
-[ "$status" = 0 ] || exit "$status"
+check_ran_tests "$status" "main run (the repository's tests)" "$@" || exit 1
 
 # The boards' software: Python 3.10 with numpy 1.23.3 and OpenCV 4.6.0, and their ROS 2 Humble
-# (rclpy 3.3.2, launch_ros 0.19.2, Fast DDS 2.6.0) unpacked from its tarball. Every test but the
-# browser ones (PY_VISION_BROWSER=off leaves them out: no Playwright there) runs again there,
-# against the package built with colcon against that Humble (.venv-board), so that the nodes
-# and the `ros2 launch` these tests start run there too. Humble's shared libraries come from
-# Debian (and zstd unpacks it).
+# (rclpy 3.3.2, launch_ros 0.19.2, Fast DDS 2.6.0) unpacked from its tarball. Every package test
+# but the browser ones (PY_VISION_BROWSER=off leaves them out: no Playwright there) runs again
+# there, with that Humble's colcon in a plain workspace (workspace_test), against the package
+# built there, so that the nodes and the `ros2 launch` these tests start run there too.
+# Humble's shared libraries come from Debian (and zstd unpacks it).
 board_run() {
   local setup=0 status=0 missing
   install_tool 'libspdlog1.10 libfmt9 libtinyxml2-9 libyaml-0-2 libssl3 zstd' \
@@ -186,9 +226,11 @@ board_run() {
 print("[test] Python", sys.version.split()[0], "numpy", numpy.__version__, "OpenCV",
       cv2.__version__, "ROS 2", __import__("os").environ["ROS_DISTRO"], "from",
       rclpy.__file__.split("/lib/python")[0])'
-    # PY_VISION_VIVID=off: the vivid VM's tests are the main run's (docs/vivid.md says why).
-    PY_VISION_BROWSER=off PY_VISION_VIVID=off python -m pytest py_vision/test \
-      --ignore=py_vision/test/browser -p no:cacheprovider "${report[@]}" "$@"
+    # PY_VISION_VIVID=off: the vivid VM's tests are the main run's (docs/vivid.md says why);
+    # PY_VISION_LINTERS=off: so are the linters, whose answer is the same on every version.
+    PY_VISION_BROWSER=off PY_VISION_VIVID=off PY_VISION_LINTERS=off workspace_test \
+      "$root/.venv-board/bin/colcon" 'board-version run' --ignore=test/browser "${report[@]}" \
+      "$@"
   ) || status=$?
   check_ran_tests "$status" 'board-version run' "$@"
 }

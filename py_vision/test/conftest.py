@@ -49,17 +49,72 @@ os.environ['ROS_LOG_DIR'] = _SESSION_ROS_LOG_DIR
 # kernel's answers do not depend on the Python side's versions). Left out, not skipped:
 # nothing claims they ran.
 LEFT_OUT_BY = {'PY_VISION_BROWSER': 'browser', 'PY_VISION_VIVID': 'vivid_session'}
+# The same for the tests with a marker: PY_VISION_LINTERS=off leaves out the linters, whose
+# answer is about the files, the same whatever Python, numpy, OpenCV or ROS runs them (the
+# board-version run; docs/tests.md says why).
+LEFT_OUT_MARKED = {'PY_VISION_LINTERS': 'linter'}
+# Under pytest-xdist (scripts/test.sh: -n 2 --dist load) a session-scoped fixture is
+# made once per worker: the vivid VM's tests are all given to one worker, so the VM boots once
+# in the run. The scheduler (below) tells them by their files' names, and a test of the VM in
+# another file fails with the reason.
+VIVID_FILES = 'test_vivid'
+
+
+def _uses(item, fixture):
+    return fixture in getattr(item, 'fixturenames', ())
+
+
+def _in_vivid_file(nodeid):
+    return nodeid.split('::', 1)[0].rsplit('/', 1)[-1].startswith(VIVID_FILES)
 
 
 def pytest_collection_modifyitems(config, items):
-    """With PY_VISION_BROWSER=off or PY_VISION_VIVID=off, leave out those tests."""
+    """Leave out what PY_VISION_*=off says."""
     for variable, fixture in LEFT_OUT_BY.items():
         if os.environ.get(variable) != 'off':
             continue
-        left_out = [item for item in items if fixture in getattr(item, 'fixturenames', ())]
+        left_out = [item for item in items if _uses(item, fixture)]
         if left_out:
             config.hook.pytest_deselected(items=left_out)
             items[:] = [item for item in items if item not in left_out]
+    for variable, marker in LEFT_OUT_MARKED.items():
+        if os.environ.get(variable) != 'off':
+            continue
+        left_out = [item for item in items if item.get_closest_marker(marker)]
+        if left_out:
+            config.hook.pytest_deselected(items=left_out)
+            items[:] = [item for item in items if item not in left_out]
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item):
+    """Fail a test of the vivid VM outside its files, before it boots a VM of its own."""
+    if _uses(item, 'vivid_session') and not _in_vivid_file(item.nodeid):
+        pytest.fail('a test of the vivid VM must be in a file named %s*.py, so that one test '
+                    'worker runs them all and the VM boots once (conftest.py)' % VIVID_FILES,
+                    pytrace=False)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """
+    Give each test to the next free xdist worker, and all the vivid VM's tests to one.
+
+    Under pytest-xdist with --dist load (or loadgroup). xdist's own xdist_group marks do not
+    group on pytest 9.2: xdist 3.8 renames the tests' node ids for them, which pytest 9.2 no
+    longer lets it do. So its scope scheduler is given the groups from here instead.
+    """
+    if config.getvalue('dist') not in ('load', 'loadgroup'):
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class VividInOneWorker(LoadScopeScheduling):
+        """xdist's scope scheduling: the largest scope (the VM's tests) first, then the rest."""
+
+        def _split_scope(self, nodeid):
+            return VIVID_FILES if _in_vivid_file(nodeid) else nodeid
+
+    return VividInOneWorker(config, log)
 
 
 def pytest_unconfigure(config):

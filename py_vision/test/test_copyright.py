@@ -20,43 +20,10 @@ ament_copyright accepts a file when it starts (after an optional shebang) with a
 the same rule for the one license the package declares in package.xml, Apache-2.0.
 """
 
-import re
 import xml.etree.ElementTree as ET
 
-from lint_targets import PACKAGE_DIR, python_files
+from lint_targets import APACHE_NOTICE, header_problem, PACKAGE_DIR, python_files
 import pytest
-
-APACHE_NOTICE = [
-    'Licensed under the Apache License, Version 2.0 (the "License");',
-    'you may not use this file except in compliance with the License.',
-    'You may obtain a copy of the License at',
-    '',
-    'http://www.apache.org/licenses/LICENSE-2.0',
-    '',
-    'Unless required by applicable law or agreed to in writing, software',
-    'distributed under the License is distributed on an "AS IS" BASIS,',
-    'WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.',
-    'See the License for the specific language governing permissions and',
-    'limitations under the License.',
-]
-COPYRIGHT_LINE = re.compile(r'^Copyright (19|20)\d\d(-(19|20)\d\d)? \S.*$')
-
-
-def header_problem(text):
-    """Return why a file's header is not acceptable, or None when it is."""
-    lines = text.splitlines()
-    if lines and lines[0].startswith('#!'):
-        lines = lines[1:]
-    comment = []
-    for line in lines:
-        if not line.startswith('#'):
-            break
-        comment.append(line[1:].strip())
-    if not comment or not COPYRIGHT_LINE.match(comment[0]):
-        return 'does not start with a "# Copyright <year> <holder>" line'
-    if comment[1:2] != [''] or comment[2:2 + len(APACHE_NOTICE)] != APACHE_NOTICE:
-        return 'the Apache-2.0 notice does not follow the copyright line'
-    return None
 
 
 def test_package_declares_the_checked_license():

@@ -15,22 +15,11 @@
 
 """No Python string of 60 lines or more: a page, a script or a document is a file of its own."""
 
-import ast
-
-from lint_targets import python_files
+from lint_targets import long_strings, python_files
 import pytest
-
-MAX_LINES = 60
 
 
 @pytest.mark.linter
 def test_no_python_string_of_60_lines_or_more():
-    long_strings = []
-    for path in python_files():
-        for node in ast.walk(ast.parse(path.read_text(encoding='utf-8'), str(path))):
-            if isinstance(node, ast.Constant) and isinstance(node.value, (str, bytes)):
-                lines = node.end_lineno - node.lineno + 1
-                if lines >= MAX_LINES:
-                    long_strings.append('%s:%d: a string of %d lines' % (
-                        path, node.lineno, lines))
-    assert not long_strings, '\n'.join(long_strings)
+    found = long_strings(python_files())
+    assert not found, '\n'.join(found)

@@ -47,9 +47,14 @@ def colcon():
 
 
 def workspace_env():
-    """Return os.environ without anything that points at the py_vision this run tests."""
+    """
+    Return os.environ without what points at the py_vision this run tests or chooses its tests.
+
+    PY_VISION_LINTERS=off and the like (conftest.py) would leave selected tests out.
+    """
     env = dict(os.environ)
-    for name in ('PY_VISION_INSTALL', 'PYTEST_ADDOPTS', 'PYTEST_CURRENT_TEST', 'COLCON'):
+    for name in ('PY_VISION_INSTALL', 'PYTEST_ADDOPTS', 'PYTEST_CURRENT_TEST', 'COLCON',
+                 'PY_VISION_LINTERS', 'PY_VISION_BROWSER', 'PY_VISION_VIVID'):
         env.pop(name, None)
     own = {str(ros_harness.PREFIX), str(ros_harness.SITE_PACKAGES)}
     for name in ('AMENT_PREFIX_PATH', 'PYTHONPATH', 'COLCON_PREFIX_PATH'):

@@ -16,11 +16,11 @@
 The pixel format table and the V4L2 structures py_vision streams with.
 
 The names a user types find their format; layouts with padded rows read the same picture as
-unpadded ones; docs/transport.md's table says what the code's table says; the streaming
-structures have the sizes and ioctl numbers of linux/videodev2.h on 64-bit machines.
+unpadded ones; the streaming structures have the sizes and ioctl numbers of
+linux/videodev2.h on 64-bit machines. (docs/transport.md's table is checked against this one
+by the repository's tests/test_docs_match_code.py: the package alone has no docs/.)
 """
 
-from pathlib import Path
 import re
 import struct
 
@@ -30,10 +30,9 @@ from py_vision.capture.devices import CAMERA, classify, FILE, SYNTHETIC
 from py_vision.capture.pixel_formats import find, FORMATS, fourcc_code, fourcc_text
 from py_vision.capture.source import SourceError
 from py_vision.capture.synthetic_picture import synthetic_yuyv
-from py_vision.control_names import pixel_format_fourcc, USB_CAM_PIXEL_FORMATS
+from py_vision.control_names import pixel_format_fourcc
 import pytest
 
-DOCS = Path(__file__).resolve().parents[3] / 'docs'
 RAW = [pixel_format for pixel_format in FORMATS.values() if not pixel_format.compressed]
 
 
@@ -78,24 +77,6 @@ def test_padded_rows_give_the_same_picture(pixel_format):
     plain = pixel_format.convert(pixel_format.view(sent, width, height), 'bgr8')
     spaced = pixel_format.convert(pixel_format.view(padded, width, height, stride), 'bgr8')
     assert np.array_equal(plain, spaced)
-
-
-def test_the_table_in_the_docs_is_the_codes():
-    text = (DOCS / 'transport.md').read_text()
-    rows = re.findall(r'^\| `(\w+)` \| [^|]+ \| ([^|]+) \| ([^|]+) \| ([^|]+) \|$', text,
-                      re.MULTILINE)
-    documented = {fourcc: ([n.strip('` ') for n in names.split(',')], encoding.strip(),
-                           bus.strip()) for fourcc, names, encoding, bus in rows}
-    expected = {}
-    for pixel_format in FORMATS.values():
-        names = [pixel_format.fourcc.lower()] + [
-            name for name, fourcc in USB_CAM_PIXEL_FORMATS.items()
-            if fourcc == pixel_format.fourcc]
-        encoding = '`%s`' % pixel_format.encoding if pixel_format.encoding else \
-            '(none: `%s`)' % pixel_format.native_encoding
-        bus = '%g' % pixel_format.bus_bytes if pixel_format.bus_bytes else 'compressed'
-        expected[pixel_format.fourcc] = (names, encoding, bus)
-    assert documented == expected
 
 
 def test_the_streaming_structures_are_videodev2s_on_64_bit():
