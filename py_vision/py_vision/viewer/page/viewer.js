@@ -297,7 +297,9 @@
     w.why.textContent = c.inactive ? "inactive " + c.inactive
       : (c.read_only && c.group === "step" ? "read-only: set when the node starts" : "");
     w.value.textContent = describeValue(c, c.value);
-    if (held.has(key) || queued.has(key)) { return; }
+    // A control being moved, or whose value is on its way to the node, keeps what the user
+    // set: a poll answered before the node took the value would put the old one back.
+    if (held.has(key) || queued.has(key) || sending.has(key)) { return; }
     if (w.input.type === "checkbox") {
       w.input.indeterminate = c.value === null;
       w.input.checked = c.value === true;
