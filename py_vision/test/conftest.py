@@ -95,6 +95,22 @@ def pytest_runtest_setup(item):
                     pytrace=False)
 
 
+@pytest.hookimpl(trylast=True)
+def pytest_runtest_teardown(item, nextitem):
+    """
+    Power the vivid VM off after the last of its tests in this process.
+
+    The VM is emulated (no KVM): idle, it still takes most of a core, which the tests after it
+    need. The VM's tests come one after the other (one worker runs them all), so the next test
+    not using it means its work is done; a later one would boot it again.
+    """
+    if _uses(item, 'vivid_session') and (nextitem is None
+                                         or not _uses(nextitem, 'vivid_session')):
+        session = item.funcargs.get('vivid_session')
+        if session is not None:
+            session.close()
+
+
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config, log):
     """
