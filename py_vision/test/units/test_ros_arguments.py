@@ -36,6 +36,7 @@ import pytest
 from rcl_interfaces.msg import ParameterDescriptor
 import rclpy
 from rclpy.context import Context
+import ros_harness
 
 SETTINGS = settings(max_examples=150, deadline=None,
                     suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -44,11 +45,24 @@ NODE = 'usbcam_publisher'
 
 @pytest.fixture(scope='module')
 def context():
-    """Give the tests an rclpy context of their own (its nodes only parse arguments)."""
+    """
+    Give the tests an rclpy context of their own (its nodes only parse arguments).
+
+    On a ROS domain of its own, with a node kept for the module's time: rmw_fastrtps makes the
+    context's DDS participant with its first node and destroys it with its last, and a
+    participant destroyed while another process' participants come and go could hang for good
+    in Fast DDS 2.14 (DomainParticipant::set_listener waiting on a listener in use; seen once,
+    with tests in two processes). The kept node keeps one participant for every example.
+    """
+    domain = ros_harness.DomainId()
     ctx = Context()
-    rclpy.init(args=[], context=ctx)
+    rclpy.init(args=[], context=ctx, domain_id=domain.value)
+    keeper = rclpy.create_node('argument_tests_participant', context=ctx, enable_rosout=False,
+                               start_parameter_services=False)
     yield ctx
+    keeper.destroy_node()
     rclpy.shutdown(context=ctx)
+    domain.release()
 
 
 def rclpy_reads(context, args, names, name=NODE):
