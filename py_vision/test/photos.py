@@ -52,7 +52,7 @@ def hand_photo() -> np.ndarray:
     path = os.environ.get('PY_VISION_HAND_PHOTO') or HAND_PHOTO_INSTALLED
     image = cv2.imread(path, cv2.IMREAD_COLOR)
     if image is None:
-        why = ('no photograph of a hand at %s (scripts/test.sh takes it out of Debian\'s '
+        why = ("no photograph of a hand at %s (scripts/test.sh takes it out of Debian's "
                'opencv-doc package; or apt-get install opencv-doc)' % path)
         if os.environ.get('CI') == 'true':
             pytest.fail(why + ', and CI requires it')

@@ -17,8 +17,9 @@ The built-in model steps in the installed vision_step: hand_signs and faces.
 
 hand_signs on the synthetic camera (no hand in it): every Twist all zero and `hand_sign` saying
 so, seen by a subscriber of its own; on a real photograph of an open hand (photos.hand_photo):
-`open_hand`, the turtle told to stand still, the hand drawn. faces on a real photograph (scikit-image's astronaut):
-the face where it is, in vision_msgs where installed, else in the JSON fallback.
+`open_hand`, the turtle told to stand still, the hand drawn. faces on a real photograph
+(scikit-image's astronaut): the face where it is, in vision_msgs where installed, else in the
+JSON fallback.
 """
 
 import json

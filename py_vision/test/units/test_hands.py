@@ -18,9 +18,9 @@ HandTracker: a real hand found with its fingertips where they are; no hand where
 
 The real hand is OpenCV's documentation's photograph (Debian's opencv-doc, photos.hand_photo):
 found as it is, mirrored and turned, its fingertips within TIP_TOLERANCE of where they are in
-the picture, its sign an open hand, and followed from frame to frame. The hand region and the crop it cuts are also checked
-geometrically (a marker drawn in a frame is found where the crop's matrix says); the signs on
-landmark sets (test_signs).
+the picture, its sign an open hand, and followed from frame to frame. The hand region and the
+crop it cuts are also checked geometrically (a marker drawn in a frame is found where the
+crop's matrix says); the signs on landmark sets (test_signs).
 """
 
 import math
