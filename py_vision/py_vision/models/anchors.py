@@ -25,17 +25,21 @@ scores into boxes, keypoints and scores (TensorsToDetectionsCalculator: the offs
 input pixels, x before y, scores are clipped logits through a sigmoid); `weighted_nms` merges
 the many overlapping detections of one object into one, averaging their boxes and keypoints
 weighted by score (NonMaxSuppressionCalculator's WEIGHTED algorithm). Coordinates are
-normalized to the model's input: 0 to 1 across its width and height.
+normalized to the model's input: 0 to 1 across its width and height. `detect_in_frame` does it
+all on a camera frame: letterboxed into the model's input, run, decoded, merged, and the boxes
+and keypoints mapped back to the frame's pixels (the palm and the face detector).
 """
 
 from dataclasses import dataclass
 import math
-from typing import Tuple
+from typing import List, Tuple
 
 import numpy as np
+from py_vision.models.crops import letterbox
+from py_vision.models.runtime import Model
 
-__all__ = ['AnchorOptions', 'decode', 'DecodeOptions', 'Detections', 'iou', 'ssd_anchors',
-           'weighted_nms']
+__all__ = ['AnchorOptions', 'decode', 'DecodeOptions', 'detect_in_frame', 'Detections', 'iou',
+           'ssd_anchors', 'weighted_nms']
 
 
 @dataclass(frozen=True)
@@ -189,3 +193,27 @@ def weighted_nms(detections: Detections, threshold: float = 0.3,
     return Detections(np.array(boxes, np.float32).reshape(count, 4),
                       np.array(keypoints, np.float32).reshape(count, width, 2),
                       np.array(scores, np.float32))
+
+
+def detect_in_frame(model: Model, image_bgr: np.ndarray, value_range: Tuple[float, float],
+                    anchors: np.ndarray, decoding: DecodeOptions, nms_threshold: float,
+                    limit: int) -> List[Tuple[np.ndarray, float, np.ndarray]]:
+    """
+    Run a square SSD detector on a whole bgr8 frame: (box, score, keypoints), best first.
+
+    The frame is letterboxed into the model's input (decoding's x_scale pixels a side, values
+    in value_range); box is (x, y, w, h) and keypoints (num_keypoints, 2), in frame pixels,
+    float32; at most `limit` detections (0: all).
+    """
+    size = decoding.x_scale
+    crop = letterbox(image_bgr, int(size), int(size), value_range)
+    regressors, scores = model.run(crop.tensor)
+    found = weighted_nms(decode(regressors, scores, anchors, decoding), nms_threshold, limit)
+    detections = []
+    for box, keypoints, score in zip(found.boxes, found.keypoints, found.scores):
+        corners = crop.points_to_image(box.reshape(2, 2) * size)
+        detections.append((np.array([corners[0, 0], corners[0, 1], corners[1, 0] - corners[0, 0],
+                                     corners[1, 1] - corners[0, 1]], np.float32),
+                           float(score),
+                           crop.points_to_image(keypoints * size).astype(np.float32)))
+    return detections

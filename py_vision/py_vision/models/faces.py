@@ -29,9 +29,7 @@ from dataclasses import dataclass
 from typing import List
 
 import numpy as np
-from py_vision.models.anchors import AnchorOptions, decode, DecodeOptions, ssd_anchors
-from py_vision.models.anchors import weighted_nms
-from py_vision.models.crops import letterbox
+from py_vision.models.anchors import AnchorOptions, DecodeOptions, detect_in_frame, ssd_anchors
 from py_vision.models.files import shipped_model
 from py_vision.models.runtime import check_shapes, load, Model
 
@@ -76,16 +74,6 @@ class FaceDetector:
 
     def detect(self, image_bgr: np.ndarray) -> List[Face]:
         """Return the faces in the frame, best score first."""
-        crop = letterbox(image_bgr, _SIZE, _SIZE, (-1.0, 1.0))
-        regressors, scores = self.model.run(crop.tensor)
-        found = weighted_nms(decode(regressors, scores, self._anchors, self._decoding),
-                             self.nms_threshold, self.max_faces)
-        faces = []
-        for box, keypoints, score in zip(found.boxes, found.keypoints, found.scores):
-            corners = crop.points_to_image(box.reshape(2, 2) * _SIZE)
-            faces.append(Face(np.array([corners[0, 0], corners[0, 1],
-                                        corners[1, 0] - corners[0, 0],
-                                        corners[1, 1] - corners[0, 1]], np.float32),
-                              float(score),
-                              crop.points_to_image(keypoints * _SIZE).astype(np.float32)))
-        return faces
+        return [Face(box, score, keypoints) for box, score, keypoints in detect_in_frame(
+            self.model, image_bgr, (-1.0, 1.0), self._anchors, self._decoding,
+            self.nms_threshold, self.max_faces)]

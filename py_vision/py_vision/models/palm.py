@@ -31,9 +31,7 @@ import math
 from typing import List
 
 import numpy as np
-from py_vision.models.anchors import AnchorOptions, decode, DecodeOptions, ssd_anchors
-from py_vision.models.anchors import weighted_nms
-from py_vision.models.crops import letterbox
+from py_vision.models.anchors import AnchorOptions, DecodeOptions, detect_in_frame, ssd_anchors
 from py_vision.models.runtime import check_shapes, Model
 
 __all__ = ['enlarge', 'hand_region', 'HandRegion', 'Palm', 'PalmDetector', 'upright_rotation']
@@ -77,19 +75,9 @@ class PalmDetector:
 
     def detect(self, image_bgr: np.ndarray) -> List[Palm]:
         """Return the palms in the frame, best score first."""
-        crop = letterbox(image_bgr, _SIZE, _SIZE, (0.0, 1.0))
-        regressors, scores = self.model.run(crop.tensor)
-        found = weighted_nms(decode(regressors, scores, self._anchors, self._decoding),
-                             self.nms_threshold, self.max_palms)
-        palms = []
-        for box, keypoints, score in zip(found.boxes, found.keypoints, found.scores):
-            corners = crop.points_to_image(box.reshape(2, 2) * _SIZE)
-            size = corners[1] - corners[0]
-            palms.append(Palm(np.array([corners[0, 0], corners[0, 1], size[0], size[1]],
-                                       np.float32),
-                              float(score),
-                              crop.points_to_image(keypoints * _SIZE).astype(np.float32)))
-        return palms
+        return [Palm(box, score, keypoints) for box, score, keypoints in detect_in_frame(
+            self.model, image_bgr, (0.0, 1.0), self._anchors, self._decoding,
+            self.nms_threshold, self.max_palms)]
 
 
 def upright_rotation(start: np.ndarray, end: np.ndarray) -> float:
