@@ -121,79 +121,56 @@ def run_node(name):
     print('%.2f stopped' % time.monotonic(), flush=True)
 
 
-class Peer:
-    """A long-lived rclpy context and node of this process, spun by a thread of its own."""
+def new_peer(domain_id, name):
+    """Return a long-lived in-process peer on domain_id: the tests' ros_harness.RosPeer."""
+    sys.path.insert(0, str(BENCH))
+    import bench_common  # noqa: F401 (puts the tests' harness on sys.path)
+    import ros_harness
+    return ros_harness.RosPeer(domain_id, name)
 
-    def __init__(self, domain_id, name):
-        import rclpy
-        from rclpy.executors import SingleThreadedExecutor
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context, domain_id=domain_id)
-        self.node = rclpy.create_node(name, context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-        self.clients = []
-        self._thread = threading.Thread(target=self._spin, daemon=True)
-        self._thread.start()
 
-    def _spin(self):
-        while self.context.ok():
-            try:
-                self.executor.spin_once(timeout_sec=0.05)
-            except Exception:  # the context was shut down under the executor
-                if self.context.ok():
-                    raise
-                return
-
-    def reach(self, name, within):
-        """Return (seconds until the name was seen or None, until the answer or None, graph)."""
-        from rcl_interfaces.srv import GetParameters
-        client = self.node.create_client(GetParameters, '/%s/get_parameters' % name)
-        # Kept until the peer closes: destroying endpoints while messages arrive crashed Fast
-        # DDS 2.6.0 (TopicPayloadPool::shrink) in this process three times in 1000 starts.
-        self.clients.append(client)
-        start = time.monotonic()
-        seen = answered = future = None
-        sent = 0.0
-        try:
-            while time.monotonic() - start < within and (seen is None or answered is None):
-                now = time.monotonic()
-                if seen is None and name in self.node.get_node_names():
-                    seen = now - start
-                if answered is None:
-                    if future is not None and future.done():
-                        answered = now - start
-                    elif client.service_is_ready() and (future is None
-                                                        or now - sent > RESEND_AFTER_S):
-                        if future is not None:
-                            client.remove_pending_request(future)
-                        future = client.call_async(GetParameters.Request(names=['use_sim_time']))
-                        sent = now
-                time.sleep(POLL_S)
-            graph = None
-            if seen is None or answered is None:
-                service = '/%s/get_parameters' % name
-                graph = {
-                    'service_ready': client.service_is_ready(),
-                    'request_readers': sorted(i.node_name for i in
-                                              self.node.get_subscriptions_info_by_topic(
-                                                  'rq%sRequest' % service, no_mangle=True)),
-                    'reply_writers': sorted(i.node_name for i in
-                                            self.node.get_publishers_info_by_topic(
-                                                'rr%sReply' % service, no_mangle=True)),
-                    'nodes': sorted(self.node.get_node_names()),
-                }
-            return seen, answered, graph
-        finally:
-            if future is not None and not future.done():
-                client.remove_pending_request(future)
-
-    def close(self):
-        import rclpy
-        self.executor.shutdown()
-        self.node.destroy_node()
-        rclpy.shutdown(context=self.context)
-        self._thread.join(2.0)
+def reach(peer, clients, name, within):
+    """Return (seconds until peer saw the name or None, until the answer or None, graph)."""
+    from rcl_interfaces.srv import GetParameters
+    client = peer.node.create_client(GetParameters, '/%s/get_parameters' % name)
+    # Kept until the peer closes: destroying endpoints while messages arrive crashed Fast
+    # DDS 2.6.0 (TopicPayloadPool::shrink) in this process three times in 1000 starts.
+    clients.append(client)
+    start = time.monotonic()
+    seen = answered = future = None
+    sent = 0.0
+    try:
+        while time.monotonic() - start < within and (seen is None or answered is None):
+            now = time.monotonic()
+            if seen is None and name in peer.node.get_node_names():
+                seen = now - start
+            if answered is None:
+                if future is not None and future.done():
+                    answered = now - start
+                elif client.service_is_ready() and (future is None
+                                                    or now - sent > RESEND_AFTER_S):
+                    if future is not None:
+                        client.remove_pending_request(future)
+                    future = client.call_async(GetParameters.Request(names=['use_sim_time']))
+                    sent = now
+            time.sleep(POLL_S)
+        graph = None
+        if seen is None or answered is None:
+            service = '/%s/get_parameters' % name
+            graph = {
+                'service_ready': client.service_is_ready(),
+                'request_readers': sorted(i.node_name for i in
+                                          peer.node.get_subscriptions_info_by_topic(
+                                              'rq%sRequest' % service, no_mangle=True)),
+                'reply_writers': sorted(i.node_name for i in
+                                        peer.node.get_publishers_info_by_topic(
+                                            'rr%sReply' % service, no_mangle=True)),
+                'nodes': sorted(peer.node.get_node_names()),
+            }
+        return seen, answered, graph
+    finally:
+        if future is not None and not future.done():
+            client.remove_pending_request(future)
 
 
 def take_domain():
@@ -316,8 +293,9 @@ def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir, 
     The lane's peer is appended to peers, for the caller to close once the results are saved:
     Fast DDS 2.6.0 crashed now and then as a peer with many clients was destroyed.
     """
-    peer = Peer(domain_id, 'repro_peer_%d' % lane)
+    peer = new_peer(domain_id, 'repro_peer_%d' % lane)
     peers.append(peer)
+    clients = []  # the peer's clients, none destroyed before the peer (see reach)
     for number in range(starts):
         name = 'repro_%d_%d' % (lane, number)
         log_path = Path(workdir) / ('%s.log' % name)
@@ -326,7 +304,7 @@ def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir, 
                 [sys.executable, str(SCRIPT), '--node', name], env=nodes_env, stdout=log,
                 stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
         try:
-            seen, answered, graph = peer.reach(name, within)
+            seen, answered, graph = reach(peer, clients, name, within)
             if graph is not None:
                 graph.update(node_udp=udp_ports(proc.pid), node_shm=shm_ports(proc.pid),
                              peers_udp=udp_ports(os.getpid()),
