@@ -39,6 +39,9 @@ Variants (all with discovery on this host, as the tests run, unless said):
   fixed        the nodes on the profile py_vision gives a node that receives no images
                (py_vision.dds, as usbcam_publisher): on Humble it listens on UDP alone, so
                receives nothing through shared memory (it still sends through it)
+  split        the nodes on the profile py_vision gives a node that receives images, the
+               small topic standing for them: on Humble its reader of that topic listens on
+               shared memory, everything else on UDP
 Prints a Markdown table, writes bench/results/dds_discovery.json (one entry per variant run).
 """
 
@@ -56,9 +59,11 @@ import threading
 import time
 
 SCRIPT = Path(__file__).resolve()
+TOPIC = 'repro_chatter'  # every lane's nodes publish and subscribe to it
+SPLIT = 'REPRO_SPLIT'  # set for a node of the split variant
 BENCH = SCRIPT.parent
 RESULTS = BENCH / 'results'
-VARIANTS = ('default', 'profile', 'no-shm', 'daemon', 'subnet', 'fixed')
+VARIANTS = ('default', 'profile', 'no-shm', 'daemon', 'subnet', 'fixed', 'split')
 # Ad-hoc domain ids of this investigation, taken through the tests' own lock files so that a
 # test run never shares one with it.
 DOMAINS = range(170, 200)
@@ -87,6 +92,11 @@ def fast_dds_warnings():
 
 def run_node(name):
     """Be the node under test: parameters, a publisher, a subscription; stop on a signal."""
+    if os.environ.get(SPLIT):
+        sys.path.insert(0, str(BENCH))
+        import bench_common  # noqa: F401 (puts the installed py_vision on sys.path)
+        from py_vision import dds
+        dds.use_packaged_profile(dds.NO_IMAGES, [], name, image_topics=['/' + TOPIC])
     import rclpy
     from std_msgs.msg import String
 
@@ -97,8 +107,14 @@ def run_node(name):
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
     node = rclpy.create_node(name)
-    publisher = node.create_publisher(String, 'repro_chatter', 10)
-    node.create_subscription(String, 'repro_chatter', lambda msg: None, 10)
+    publisher = node.create_publisher(String, TOPIC, 10)
+    heard = set()
+
+    def on_message(msg):
+        if msg.data != name and msg.data not in heard:
+            heard.add(msg.data)
+            print('%.2f heard %s' % (time.monotonic(), msg.data), flush=True)
+    node.create_subscription(String, TOPIC, on_message, 10)
     seen = {'names': None}
 
     def tick():
@@ -200,8 +216,7 @@ def profile_file(workdir, variant):
     if variant == 'fixed':
         env = {'ROS_LOCALHOST_ONLY': '1'} if on_humble() else {
             'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}
-        return dds.use_packaged_profile(dds.NO_IMAGES, [], 'repro', environ=env,
-                                        receives_images=False)
+        return dds.use_packaged_profile(dds.NO_IMAGES, [], 'repro', environ=env, image_topics=[])
     path = dds.tailor(dds.packaged_profile(), dds.SMALL_SEGMENT, localhost=True)
     if variant == 'no-shm':
         text = Path(path).read_text()
@@ -230,6 +245,8 @@ def variant_env(variant, domain_id, workdir):
     nodes, peers = dict(env), dict(env)
     if variant in ('profile', 'no-shm', 'fixed'):
         nodes['FASTRTPS_DEFAULT_PROFILES_FILE'] = profile_file(workdir, variant)
+    if variant == 'split':  # each node its own profile (its own UDP port for its endpoints)
+        nodes[SPLIT] = '1'
     if variant == 'no-shm':
         peers['FASTRTPS_DEFAULT_PROFILES_FILE'] = nodes['FASTRTPS_DEFAULT_PROFILES_FILE']
     return nodes, peers
@@ -317,17 +334,24 @@ def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir, 
             except subprocess.TimeoutExpired:
                 os.killpg(proc.pid, signal.SIGKILL)
                 status = proc.wait()
+        lines = log_path.read_text(errors='replace').splitlines()
         record = {'lane': lane, 'number': number, 'name_s': seen, 'answer_s': answered,
-                  'reached': seen is not None and answered is not None, 'status': status}
-        if not record['reached']:
+                  'reached': seen is not None and answered is not None, 'status': status,
+                  # Other lanes' nodes whose messages it received (through shared memory in
+                  # `split`), and how often Fast DDS 2.6.0's shared-memory listener failed
+                  # (docs/boards.md: it repeats tens of thousands of times once stuck).
+                  'heard': sum(1 for line in lines if ' heard ' in line),
+                  'shm_read_failures': sum(1 for line in lines if STUCK in line)}
+        if not record['reached'] or record['shm_read_failures'] or status != 0:
             record['graph'] = graph
-            lines = log_path.read_text(errors='replace').splitlines()
-            # Fast DDS 2.6.0's shared-memory listener stuck (docs/boards.md): counted, as it
-            # repeats tens of thousands of times.
-            record['shm_read_failures'] = sum(1 for line in lines if STUCK in line)
             record['log'] = [line for line in lines
                              if not any(noise in line for noise in SHUTDOWN_NOISE)][-40:]
-            print('  unreached %s: %s' % (name, json.dumps(graph)), flush=True)
+            if not record['reached']:
+                print('  unreached %s: %s' % (name, json.dumps(graph)), flush=True)
+            elif record['shm_read_failures']:
+                print('  %s reached, its shared-memory listener stuck' % name, flush=True)
+            else:
+                print('  %s reached, exit status %s' % (name, status), flush=True)
         else:
             log_path.unlink()
         results.append(record)
@@ -373,6 +397,8 @@ def measure(variant, total, lanes, within, peers):
             'answer_median_s': round(answers[len(answers) // 2], 2) if answers else None,
             'answer_max_s': round(answers[-1], 2) if answers else None,
             'not_stopped_cleanly': sum(1 for r in results if r['status'] != 0),
+            'shm_stuck': sum(1 for r in results if r['shm_read_failures']),
+            'heard_none': sum(1 for r in results if not r['heard']),
             'shm_files_before': before, 'shm_files_after': fast_dds_segments(),
             'seconds': round(time.monotonic() - started, 1), 'lanes': lanes, 'within_s': within,
             'domain_id': domain_id,

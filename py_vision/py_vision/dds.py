@@ -31,13 +31,18 @@ temporary directory and named after its content, tailored to the node:
 - Socket buffers no larger than the kernel allows (net.core.wmem_max / rmem_max): Fast DDS
   drops its whole UDP transport, silently, when a buffer above the limit is requested, and
   with it every peer on another host.
-- On Fast DDS 2.6 (Humble, the boards), a node that receives no images receives nothing
-  through shared memory (UDP locators only; it still sends its images through it): Fast DDS
-  2.6.0 to 2.6.5 can stop reading a shared-memory port for good, and the node would go
-  unheard (docs/boards.md, "A node nobody hears"). PY_VISION_SHM_RECEIVE=1 turns this off.
+- On Fast DDS 2.6 (Humble, the boards), a node receives through shared memory its images
+  alone: discovery and every other reader and writer (services, parameter events, the graph)
+  listen on UDP, the readers of its image topics on the participant's shared-memory port
+  (reader profiles named after those topics, which rmw_fastrtps looks up). It still sends
+  through shared memory. Fast DDS 2.6.0 to 2.6.5 can stop reading a shared-memory port for
+  good, and a node that listened there for everything would go unheard (docs/boards.md, "A
+  node nobody hears"). PY_VISION_SHM_RECEIVE=1 turns this off.
 """
 
+import atexit
 import os
+import socket
 import sys
 import xml.etree.ElementTree as ET
 import zlib
@@ -76,7 +81,7 @@ BYTES_PER_PIXEL = 3
 
 # Fast DDS 2.6.0 to 2.6.5 stop reading a shared-memory port for good when the message at its
 # head came from a process that has since removed its segment (fixed in 2.6.6). Humble's
-# rmw_fastrtps (6) runs on 2.6: there a node that receives no images listens on UDP only.
+# rmw_fastrtps (6) runs on 2.6: there a node listens on UDP, but for its images.
 SHM_RECEIVE_SETTING = 'PY_VISION_SHM_RECEIVE'
 # Fast DDS' discovery multicast group (its ports are Fast DDS' own: 0 means computed).
 DISCOVERY_MULTICAST = '239.255.0.1'
@@ -147,7 +152,8 @@ def _kernel_limit(path):
         return None
 
 
-def tailor(profile, segment=None, localhost=False, limits=None, udp_receive=False):
+def tailor(profile, segment=None, localhost=False, limits=None, udp_receive=False,
+           shm_topics=()):
     """
     Return the path of a copy of profile tailored to one node, or profile itself if unchanged.
 
@@ -155,7 +161,9 @@ def tailor(profile, segment=None, localhost=False, limits=None, udp_receive=Fals
     UDP to 127.0.0.1; limits: the kernel's socket buffer limits by element name (by default
     read from /proc/sys/net/core), to which the buffer sizes are capped; udp_receive: the
     participant listens on UDP locators only (discovery and data), none of shared memory, which
-    it still sends through.
+    it still sends through; shm_topics: with udp_receive, the topics (resolved names) whose
+    readers still listen on shared memory (and UDP), alone on the participant's shared-memory
+    port.
     """
     if limits is None:
         limits = {tag: _kernel_limit(path) for tag, path in _KERNEL_LIMITS.items()}
@@ -184,7 +192,7 @@ def tailor(profile, segment=None, localhost=False, limits=None, udp_receive=Fals
             descriptor.insert(list(descriptor).index(descriptor.find(q % 'type')) + 1, allowed)
             changed = True
     if udp_receive:
-        _receive_over_udp(tree.getroot(), q)
+        _receive_over_udp(tree.getroot(), q, shm_topics)
         changed = True
     if not changed:
         return profile
@@ -203,11 +211,29 @@ def tailor(profile, segment=None, localhost=False, limits=None, udp_receive=Fals
         with os.fdopen(os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644), 'w') as out:
             out.write(fitted)
         os.replace(partial, path)
+    if shm_topics:
+        # With its own port in it, the copy is this process' alone: gone when it ends (Fast
+        # DDS reads it once, as the first node starts).
+        atexit.register(_remove, path)
     return path
 
 
-def _receive_over_udp(root, q):
-    """Give the default participant profile UDPv4 locators to listen on, and so none of SHM."""
+def _remove(path):
+    try:
+        os.unlink(path)
+    except OSError:
+        pass
+
+
+def _receive_over_udp(root, q, shm_topics=()):
+    """
+    Give the profile UDPv4 locators to listen on, and so none of shared memory.
+
+    Without shm_topics, the participant's (discovery and every endpoint). With them, discovery
+    and the default reader and writer profiles get UDP locators, and each topic in shm_topics
+    a reader profile of its own name (rmw_fastrtps looks one up by the topic's resolved name)
+    that lists none: its reader takes the participant's defaults, shared memory first.
+    """
     rtps = root.find('%s/%s' % (q % 'participant', q % 'rtps'))
 
     def udp_list(parent, name, address=None):
@@ -216,10 +242,33 @@ def _receive_over_udp(root, q):
         if address is not None:
             ET.SubElement(udp, q % 'address').text = address
     # No address, no port: every allowed interface, the participant's well-known ports.
-    udp_list(rtps, 'defaultUnicastLocatorList')
+    if not shm_topics:
+        udp_list(rtps, 'defaultUnicastLocatorList')
     builtin = ET.SubElement(rtps, q % 'builtin')
     udp_list(builtin, 'metatrafficUnicastLocatorList')
     udp_list(builtin, 'metatrafficMulticastLocatorList', DISCOVERY_MULTICAST)
+    if not shm_topics:
+        return
+    # A port of its own: with port 0, Fast DDS 2.6.0 computes one from a participant id not yet
+    # given at that point, and the endpoints hear nothing.
+    port = str(free_udp_port())
+    for kind in ('data_writer', 'data_reader'):
+        endpoint = ET.SubElement(root, q % kind, {
+            'profile_name': 'py_vision_udp_%s' % kind.split('_')[1],
+            'is_default_profile': 'true'})
+        udp_list(endpoint, 'unicastLocatorList')
+        ET.SubElement(endpoint.find('.//' + q % 'udpv4'), q % 'port').text = port
+    for topic in shm_topics:
+        reader = ET.SubElement(root, q % 'data_reader', {'profile_name': topic})
+        # As rmw_fastrtps sets it; an element, since an empty profile is not one to Fast DDS.
+        ET.SubElement(reader, q % 'historyMemoryPolicy').text = 'PREALLOCATED_WITH_REALLOC'
+
+
+def free_udp_port():
+    """Return a UDP port free on every interface, as the kernel picks one."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(('', 0))
+        return probe.getsockname()[1]
 
 
 def shm_receive_breaks(environ=os.environ):
@@ -251,14 +300,16 @@ def _holds(path, text):
 
 
 def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.environ,
-                         receives_images=True):
+                         image_topics=()):
     """
     Point Fast DDS at the packaged profile tailored to a node; return its path, or None.
 
     publishes: NO_IMAGES, OWN_SIZE or INPUT_SIZE (None: large images, SAFE_SIZE); args: the
     node's command line (default sys.argv), where OWN_SIZE and INPUT_SIZE read the frame size;
-    receives_images: False for a node that subscribes to no images, which on Fast DDS 2.6 then
-    receives nothing through shared memory (shm_receive_breaks).
+    image_topics: the resolved topics whose images the node reads. On Fast DDS 2.6
+    (shm_receive_breaks) the node then receives through shared memory on these topics alone,
+    everything else (discovery, services, other topics) through UDP; None: the node's topics
+    could not be told, and it receives through shared memory as Fast DDS would.
     Left alone (None): another RMW is selected, the user set a profile file, or Fast DDS would
     load DEFAULT_FASTRTPS_PROFILES.xml from the working directory.
     """
@@ -271,14 +322,21 @@ def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.env
     path = packaged_profile()
     if path is not None:
         segment = segment_size(publishes, sys.argv if args is None else args, node_name)
-        path = tailor(path, segment, localhost_only(environ),
-                      udp_receive=not receives_images and shm_receive_breaks(environ))
+        udp = image_topics is not None and shm_receive_breaks(environ)
+        shm_topics = tuple(image_topics or ()) if udp else ()
+        path = tailor(path, segment, localhost_only(environ), udp_receive=udp,
+                      shm_topics=shm_topics)
         environ[USER_SETTING] = path
-        _chosen['segment'] = segment
+        _chosen.update(segment=segment, shm_topics=shm_topics)
     return path
 
 
-_chosen = {'segment': None}  # what use_packaged_profile() gave this process
+_chosen = {'segment': None, 'shm_topics': ()}  # what use_packaged_profile() gave this process
+
+
+def shm_topics():
+    """Return the topics whose readers alone receive through shared memory (empty: all do)."""
+    return _chosen['shm_topics']
 
 
 def frame_fits(frame_bytes, segment=None):

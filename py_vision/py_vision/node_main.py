@@ -45,9 +45,9 @@ import sys
 import tempfile
 import threading
 import traceback
-from typing import Callable, ClassVar, Dict, List, Protocol, Sequence, Type
+from typing import Callable, ClassVar, Dict, List, Optional, Protocol, Sequence, Tuple, Type
 
-from py_vision import dds, ros_arguments
+from py_vision import dds, ros_arguments, transport
 from py_vision.params import ConfigError, help_text, Spec
 from py_vision.throttled_log import ThrottledLog
 import rclpy
@@ -68,9 +68,11 @@ class NodeProgram(Protocol):
     The class says what --help prints (NODE_NAME, PARAMETERS, SUMMARY; a classmethod
     help_parameters(argv), where it has one, lists them instead), what it publishes
     before rclpy starts (PUBLISHES: dds.NO_IMAGES, OWN_SIZE or INPUT_SIZE, which sizes its
-    shared memory), whether it subscribes to images (RECEIVES_IMAGES: without, it listens on
-    UDP alone on Fast DDS 2.6) and its own commands (COMMANDS: a flag such as '--list-formats'
-    -> a function of the command line returning the exit status, run instead of the node).
+    shared memory), the base topic whose images it reads, as it subscribes to it (IMAGE_INPUT,
+    None for none: on Fast DDS 2.6 the node receives through shared memory on that topic's
+    transports alone, everything else through UDP) and its own commands (COMMANDS: a flag such
+    as '--list-formats' -> a function of the command line returning the exit status, run
+    instead of the node).
     Built with no arguments, the node raises ConfigError for anything the user has to fix;
     close() releases what it holds (threads, devices, sockets) and copes with a half-built node;
     `failed` is set when it stops because of an error (the exit status is then 1).
@@ -80,7 +82,7 @@ class NodeProgram(Protocol):
     PARAMETERS: ClassVar[Sequence[Spec]]
     SUMMARY: ClassVar[str]
     PUBLISHES: ClassVar[str]
-    RECEIVES_IMAGES: ClassVar[bool]
+    IMAGE_INPUT: ClassVar[Optional[str]]
     COMMANDS: ClassVar[Dict[str, Callable[[List[str]], int]]]
     failed: bool
 
@@ -261,8 +263,9 @@ def run(node_class: Type[NodeProgram], args=None) -> int:
     # service or a timer is being created can deadlock), and what was built is closed.
     install_quiet_signals()
     # The shared-memory segment is sized to what the node publishes, before parameters exist.
+    image_topics = _image_topics(node_class, argv)
     dds.use_packaged_profile(node_class.PUBLISHES, argv, node_class.NODE_NAME,
-                             receives_images=node_class.RECEIVES_IMAGES)
+                             image_topics=image_topics)
     # rclpy gets the parameters in py_vision's order (ros_arguments), whatever its own.
     with ros_arguments.rclpy_arguments(argv, node_class.NODE_NAME) as rclpy_argv:
         error = _init_rclpy(rclpy_argv)
@@ -285,6 +288,7 @@ def run(node_class: Type[NodeProgram], args=None) -> int:
             node = node_class.__new__(node_class)
             node.__init__()
             built = True
+            _check_image_topics(node, image_topics)
             executor.add_node(node)
             stop_guard = node.create_guard_condition(lambda: None)
             _Stopping.wake = stop_guard.trigger
@@ -319,6 +323,31 @@ def run(node_class: Type[NodeProgram], args=None) -> int:
     if node is not None and built and node.failed:
         status = 1
     return status
+
+
+def _image_topics(node_class: Type[NodeProgram], argv: Sequence[str]) -> Tuple[str, ...]:
+    """Return the topics, as rcl will resolve them, that node_class may read images on."""
+    if node_class.IMAGE_INPUT is None:
+        return ()
+    name = ros_arguments.node_name(argv, node_class.NODE_NAME)
+    return transport.image_topics(ros_arguments.topic_name(argv, node_class.IMAGE_INPUT, name))
+
+
+_IMAGE_TYPES = ('Image', 'CompressedImage', 'CompressedVideo')
+
+
+def _check_image_topics(node, image_topics: Tuple[str, ...]) -> None:
+    """Warn of an image subscription that dds did not give shared memory (Fast DDS 2.6 only)."""
+    if not dds.shm_topics():
+        return
+    for subscription in node.subscriptions:
+        if (subscription.msg_type.__name__ in _IMAGE_TYPES
+                and subscription.topic_name not in image_topics):
+            node.get_logger().warning(
+                'frames on %s come through UDP, not shared memory: on Fast DDS 2.6 only the '
+                'topics read off the command line (%s) are (docs/boards.md, "A node nobody '
+                'hears"); remap usb_camera/image with -r rather than with a substitution' % (
+                    subscription.topic_name, ', '.join(image_topics[:2])))
 
 
 class CallbackFailures:

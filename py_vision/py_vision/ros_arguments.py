@@ -47,7 +47,9 @@ reads whole is an integer, anything strtod reads whole is a double (``.inf``, ``
 the rest is a string. A sequence is a list of such values.
 
 The node's name is ``-r __node:=NAME`` (or ``__name``) and ``-r __ns:=/NS`` applied to its own,
-the first rule that applies winning, as in rcl.
+the first rule that applies winning, as in rcl. A topic's name is the node's name expanded in its
+namespace, then replaced by the first ``-r [NODE:]FROM:=TO`` whose FROM, expanded the same way,
+is that name (`topic_name`). (rcl refuses substitutions such as ``{node}`` in a rule.)
 """
 
 import contextlib
@@ -134,6 +136,32 @@ def node_name(argv: Sequence[str], name: str, namespace: str = '/') -> str:
     name = new_name or name
     namespace = (new_namespace or namespace).rstrip('/')
     return '%s/%s' % (namespace, name)
+
+
+def _expand(topic: str, name: str, namespace: str) -> str:
+    """Return topic expanded as rcl expands it for node `name` in `namespace`."""
+    if topic.startswith('/'):
+        return topic
+    if topic.startswith('~'):
+        return '%s/%s%s' % (namespace.rstrip('/'), name, topic[1:])
+    return '%s/%s' % (namespace.rstrip('/'), topic)
+
+
+def topic_name(argv: Sequence[str], topic: str, fully_qualified_name: str) -> str:
+    """Return the name `topic` resolves to in the node of that name, after argv's remappings."""
+    namespace, _, name = fully_qualified_name.rpartition('/')
+    namespace = namespace or '/'
+    resolved = _expand(topic, name, namespace)
+    for flag, rule in _flags(argv):
+        if flag not in ('-r', '--remap') or ':=' not in rule:
+            continue
+        match, replacement = rule.split(':=', 1)
+        target, _, match = match.rpartition(':')
+        if (target and target != name) or match in ('__node', '__name', '__ns'):
+            continue
+        if _expand(match, name, namespace) == resolved:
+            return _expand(replacement, name, namespace)
+    return resolved
 
 
 def scalar(text: str, quoted: bool = False) -> Any:

@@ -59,6 +59,12 @@ _SOF_MARKERS = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}
 _NO_PIXELS = np.empty(0, np.uint8)   # what a kept message holds between frames
 
 
+def image_topics(resolved_base: str) -> Tuple[str, ...]:
+    """Return every topic a subscriber may read base's frames on: raw, compressed, video."""
+    return (resolved_base,) + tuple('%s/%s' % (resolved_base, transport)
+                                    for transport in ('compressed',) + VIDEO_TRANSPORTS)
+
+
 def compressed_topic(node, base_topic: str) -> str:
     """Return the compressed topic of base_topic as resolved (remapped) for node."""
     return node.resolve_topic_name(base_topic) + '/compressed'

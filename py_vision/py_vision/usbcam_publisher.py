@@ -102,7 +102,7 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
 
     NODE_NAME = 'usbcam_publisher'
     PUBLISHES = dds.OWN_SIZE
-    RECEIVES_IMAGES = False
+    IMAGE_INPUT = None
     SUMMARY = ('Publishes a USB camera (or a video file, or the built-in synthetic camera) as '
                'sensor_msgs/Image on usb_camera/image, JPEG on usb_camera/image/compressed '
                'and CameraInfo on usb_camera/camera_info. Every control the camera reports is '

@@ -50,7 +50,7 @@ class VideoSubscriber(Node):
     NODE_NAME = 'usbcam_subscriber'
     COMMANDS = {}
     PUBLISHES = dds.NO_IMAGES
-    RECEIVES_IMAGES = True
+    IMAGE_INPUT = IMAGE_TOPIC
     SUMMARY = ('Shows the frames of usb_camera/image (remap it to watch another topic) in an '
                'OpenCV window or a browser, and logs their rate and latency.')
     PARAMETERS = viewer_specs('auto', DISPLAYS) + (

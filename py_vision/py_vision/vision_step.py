@@ -148,7 +148,7 @@ class VisionStep(Node):
     FIXED_STEP: Optional[str] = None  # a node that always runs one step has no `step`
     COMMANDS = {}
     PUBLISHES = dds.INPUT_SIZE
-    RECEIVES_IMAGES = True
+    IMAGE_INPUT = 'usb_camera/image'
     SUMMARY = ('Runs a processing step (-p step:=circle, hand_signs, faces or your own '
                'module.path:Class) on the newest frame of usb_camera/image and publishes what '
                'it returns on vision_step/image. With -p step:=NAME, --help also lists that '

@@ -216,19 +216,68 @@ def test_udp_receive_keeps_the_shared_memory_to_send_through():
     assert segment(fitted) == vga and allowed_interfaces(fitted) == ['127.0.0.1']
 
 
-def test_udp_receive_on_fast_dds_2_6_for_nodes_without_images_unless_turned_off(
+# A node that receives images, on Fast DDS 2.6: discovery on UDP; its endpoints take the
+# participant's defaults (shared memory first) only where a reader profile of their topic's
+# name lists none.
+DISCOVERY_ON_UDP = dict(UDP_ONLY, defaultUnicastLocatorList=[])
+
+
+def endpoints(path):
+    """Return the endpoint profiles: {(kind, name): (default?, [(kind, address, port)])}."""
+    found = {}
+    for kind in ('data_writer', 'data_reader'):
+        for profile in ET.parse(path).getroot().findall(NS + kind):
+            listed = profile.iterfind('%sunicastLocatorList/%slocator/*' % (NS, NS))
+            locators = [(loc.tag[len(NS):], loc.findtext(NS + 'address'),
+                         loc.findtext(NS + 'port')) for loc in listed]
+            found[kind, profile.get('profile_name')] = (
+                profile.get('is_default_profile') == 'true', locators)
+    return found
+
+
+def test_image_readers_alone_keep_the_shared_memory():
+    packaged = dds.packaged_profile()
+    topics = ('/usb_camera/image', '/usb_camera/image/compressed')
+    fitted = dds.tailor(packaged, dds.SMALL_SEGMENT, localhost=True, udp_receive=True,
+                        shm_topics=topics)
+    assert listening(fitted) == DISCOVERY_ON_UDP
+    found = endpoints(fitted)
+    # Every other reader and writer (services, parameter events, the graph) listens on one UDP
+    # port of its own, not 0 (with 0 Fast DDS 2.6.0 computes a port nobody listens on).
+    (writer_default, writer), = [v for (kind, _), v in found.items() if kind == 'data_writer']
+    defaults = [v for (kind, name), v in found.items()
+                if kind == 'data_reader' and name not in topics]
+    assert writer_default and defaults == [(True, writer)]
+    (udp_kind, address, port), = writer
+    assert udp_kind == 'udpv4' and address is None and 0 < int(port) < 65536
+    # The image topics' readers list no locators: the participant's, shared memory first.
+    assert [found['data_reader', topic] for topic in topics] == [(False, []), (False, [])]
+    # Two nodes never share that port.
+    other = dds.tailor(packaged, dds.SMALL_SEGMENT, localhost=True, udp_receive=True,
+                       shm_topics=topics)
+    assert endpoints(other)['data_writer', 'py_vision_udp_writer'] != (True, writer)
+
+
+def test_on_fast_dds_2_6_nodes_receive_over_udp_but_images_unless_turned_off(
         tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     on_2_6 = ros_harness.ON_HUMBLE  # Humble's rmw_fastrtps 6 runs Fast DDS 2.6 (the boards)
     assert dds.shm_receive_breaks({}) == on_2_6
     camera = dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher',
-                                      {'ROS_LOCALHOST_ONLY': '1'}, receives_images=False)
+                                      {'ROS_LOCALHOST_ONLY': '1'}, image_topics=())
     assert listening(camera) == (UDP_ONLY if on_2_6 else SHM_AND_UDP)
-    # Nodes that receive images keep receiving them through shared memory.
+    assert endpoints(camera) == {}
+    # A node that receives images keeps receiving them through shared memory, and nothing else.
     viewer = dds.use_packaged_profile(dds.NO_IMAGES, [], 'usbcam_subscriber',
-                                      {'ROS_LOCALHOST_ONLY': '1'}, receives_images=True)
-    assert listening(viewer) == SHM_AND_UDP
+                                      {'ROS_LOCALHOST_ONLY': '1'}, image_topics=('/image',))
+    assert listening(viewer) == (DISCOVERY_ON_UDP if on_2_6 else SHM_AND_UDP)
+    assert (('data_reader', '/image') in endpoints(viewer)) == on_2_6
+    assert dds.shm_topics() == (('/image',) if on_2_6 else ())
+    # Topics that could not be told: as Fast DDS would.
+    unknown = dds.use_packaged_profile(dds.NO_IMAGES, [], 'usbcam_subscriber',
+                                       {'ROS_LOCALHOST_ONLY': '1'}, image_topics=None)
+    assert listening(unknown) == SHM_AND_UDP and endpoints(unknown) == {}
     env = {dds.SHM_RECEIVE_SETTING: '1', 'ROS_LOCALHOST_ONLY': '1'}
     assert not dds.shm_receive_breaks(env)
     assert listening(dds.use_packaged_profile(
-        dds.OWN_SIZE, [], 'usbcam_publisher', env, receives_images=False)) == SHM_AND_UDP
+        dds.OWN_SIZE, [], 'usbcam_publisher', env, image_topics=())) == SHM_AND_UDP

@@ -30,7 +30,7 @@ import tempfile
 from hypothesis import assume, given, HealthCheck, settings, strategies as st
 from py_vision import ros_arguments
 from py_vision.ros_arguments import (
-    given_parameters, node_name, parameters_file, scalar, UnreadableArguments,
+    given_parameters, node_name, parameters_file, scalar, topic_name, UnreadableArguments,
     without_parameters)
 import pytest
 from rcl_interfaces.msg import ParameterDescriptor
@@ -211,6 +211,32 @@ def test_an_unreadable_file_or_rule_is_one_line(tmp_path):
 def test_the_node_name_is_rcls(context, remaps):
     fqn, _ = rclpy_reads(context, ['--ros-args'] + remaps, [])
     assert node_name(argv(*remaps), NODE) == fqn
+
+
+# The remappings a user or a launch file gives a viewer, as rcl reads them (first rule wins).
+TOPIC_REMAPS = [
+    [], ['-r', '__ns:=/left'], ['-r', 'usb_camera/image:=/left/image'],
+    ['-r', '/usb_camera/image:=cam/image'], ['-r', '__ns:=/left', '-r', 'usb_camera/image:=raw'],
+    ['-r', 'usbcam_publisher:usb_camera/image:=mine'], ['-r', 'other:usb_camera/image:=theirs'],
+    ['-r', '__node:=viewer', '-r', 'viewer:usb_camera/image:=renamed'],
+    ['-r', 'usb_camera/image:=first', '-r', 'usb_camera/image:=second'],
+    ['-r', 'usb_camera/other:=x', '-r', '__ns:=/a/b'], ['-r', 'usb_camera/image:=~/own'],
+]
+
+
+@pytest.mark.parametrize('remaps', TOPIC_REMAPS)
+def test_a_topic_resolves_as_rcl_resolves_it(context, remaps):
+    # What dds gives shared memory on Fast DDS 2.6 (node_main), before there is a node.
+    node = rclpy.create_node(NODE, context=context, cli_args=['--ros-args'] + remaps,
+                             use_global_arguments=False, enable_rosout=False,
+                             start_parameter_services=False)
+    try:
+        expected = node.resolve_topic_name('usb_camera/image')
+        fqn = node.get_fully_qualified_name()
+    finally:
+        node.destroy_node()
+    assert node_name(argv(*remaps), NODE) == fqn
+    assert topic_name(argv(*remaps), 'usb_camera/image', fqn) == expected
 
 
 # --- what node_main gives rclpy: the node gets exactly what ros_arguments read ---------------
