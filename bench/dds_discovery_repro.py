@@ -96,7 +96,11 @@ def run_node(name):
         sys.path.insert(0, str(BENCH))
         import bench_common  # noqa: F401 (puts the installed py_vision on sys.path)
         from py_vision import dds
-        dds.use_packaged_profile(dds.NO_IMAGES, [], name, image_topics=['/' + TOPIC])
+        # As a py_vision node that publishes images (its last messages linger, dds.linger_s).
+        dds.use_packaged_profile(dds.OWN_SIZE, [], name, image_topics=['/' + TOPIC])
+        linger = dds.linger_s()
+    else:
+        linger = 0.0
     import rclpy
     from std_msgs.msg import String
 
@@ -132,6 +136,7 @@ def run_node(name):
             # Humble's rclpy raises here when a reply finds the client's reader not yet
             # matched ('client will not receive response'); the client asks again.
             print('%.2f callback failed: %s' % (time.monotonic(), error), flush=True)
+    time.sleep(linger)
     node.destroy_node()
     rclpy.shutdown()
     print('%.2f stopped' % time.monotonic(), flush=True)
@@ -204,8 +209,11 @@ def take_domain():
 
 
 def on_humble():
-    import rclpy
-    return not hasattr(rclpy, 'parameter_client')
+    """Return True on Humble's rclpy (3.x), as the tests tell it (ros_harness.ON_HUMBLE)."""
+    sys.path.insert(0, str(BENCH))
+    import bench_common  # noqa: F401 (puts the tests' harness on sys.path)
+    import ros_harness
+    return ros_harness.ON_HUMBLE
 
 
 def profile_file(workdir, variant):

@@ -327,11 +327,22 @@ def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.env
         path = tailor(path, segment, localhost_only(environ), udp_receive=udp,
                       shm_topics=shm_topics)
         environ[USER_SETTING] = path
-        _chosen.update(segment=segment, shm_topics=shm_topics)
+        _chosen.update(segment=segment, shm_topics=shm_topics,
+                       linger=udp and publishes != NO_IMAGES)
     return path
 
 
-_chosen = {'segment': None, 'shm_topics': ()}  # what use_packaged_profile() gave this process
+# What use_packaged_profile() gave this process.
+_chosen = {'segment': None, 'shm_topics': (), 'linger': False}
+# How long a node that published images through shared memory on Fast DDS 2.6 keeps its
+# participant after its last frame: a reader that got its first frame from it just before
+# reads it while the segment it is in still exists (else that reader's port is dead for good).
+LINGER_S = 0.25
+
+
+def linger_s():
+    """Return the seconds to wait between a node's last frame and its participant's end."""
+    return LINGER_S if _chosen['linger'] else 0.0
 
 
 def shm_topics():

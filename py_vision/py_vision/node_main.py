@@ -44,6 +44,7 @@ import signal
 import sys
 import tempfile
 import threading
+import time
 import traceback
 from typing import Callable, ClassVar, Dict, List, Optional, Protocol, Sequence, Tuple, Type
 
@@ -312,6 +313,9 @@ def run(node_class: Type[NodeProgram], args=None) -> int:
         if node is not None:
             node.close()
             if built:
+                # On Fast DDS 2.6 the node's last frames stay readable a moment (dds.LINGER_S):
+                # its participant, and with it its shared memory, ends with the node.
+                time.sleep(dds.linger_s())
                 node.destroy_node()
         try:
             executor.shutdown()
