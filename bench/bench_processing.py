@@ -76,7 +76,8 @@ def tutorial_node(work_ms):
             cv2.circle(image, CIRCLE_CENTER, CIRCLE_RADIUS, CIRCLE_BGR, -1)
             self.publisher_.publish(self.bridge.cv2_to_imgmsg(image, 'bgr8', header=msg.header))
 
-    dds.use_packaged_profile()  # the same transport as the py_vision nodes
+    # The same transport as the py_vision nodes: on Humble, images alone through shared memory.
+    dds.use_packaged_profile(image_topics=('/usb_camera/image',))
     # Ctrl-C ends the loop between callbacks: rclpy's own handler would shut the context down
     # under a callback still publishing, and the reference would end in a traceback.
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)

@@ -198,6 +198,8 @@ def tailor(profile, segment=None, localhost=False, limits=None, udp_receive=Fals
         return profile
     fitted = '<?xml version="1.0" encoding="UTF-8"?>\n%s\n' % ET.tostring(
         tree.getroot(), encoding='unicode')
+    if udp_receive and shm_topics:
+        return _own_copy(fitted)
     # Named after its content, so an upgraded profile rarely meets a stale copy, and checked
     # anyway; a file of another user's is never trusted. (zlib, not hashlib: OpenSSL would add
     # 4 MB to every node.)
@@ -211,10 +213,32 @@ def tailor(profile, segment=None, localhost=False, limits=None, udp_receive=Fals
         with os.fdopen(os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644), 'w') as out:
             out.write(fitted)
         os.replace(partial, path)
-    if shm_topics:
-        # With its own port in it, the copy is this process' alone: gone when it ends (Fast
-        # DDS reads it once, as the first node starts).
-        atexit.register(_remove, path)
+    return path
+
+
+_OWN_COPY = 'py_vision_fastdds_%d_pid%d.xml'
+
+
+def _own_copy(fitted):
+    """
+    Write a copy that holds a port of this process' own; return its path.
+
+    Named after the process and removed when it ends (Fast DDS reads it once, as the first
+    node starts); those of processes that ended without removing theirs (killed) go too.
+    """
+    directory = os.environ.get('TMPDIR') or '/tmp'
+    prefix = 'py_vision_fastdds_%d_pid' % os.getuid()
+    for name in os.listdir(directory):
+        pid = name[len(prefix):-len('.xml')]
+        if name.startswith(prefix) and name.endswith('.xml') and pid.isdigit():
+            if not os.path.exists('/proc/%s' % pid):
+                _remove(os.path.join(directory, name))
+    path = os.path.join(directory, _OWN_COPY % (os.getuid(), os.getpid()))
+    _remove(path)  # left by a killed process that had this pid
+    # Created here, never an existing file or link in the shared directory.
+    with os.fdopen(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644), 'w') as out:
+        out.write(fitted)
+    atexit.register(_remove, path)
     return path
 
 
@@ -251,7 +275,9 @@ def _receive_over_udp(root, q, shm_topics=()):
         return
     # A port of its own: with port 0, Fast DDS 2.6.0 computes one from a participant id not yet
     # given at that point, and the endpoints hear nothing.
-    port = str(free_udp_port())
+    port = free_udp_port()
+    _chosen['port'] = port
+    port = str(port)
     for kind in ('data_writer', 'data_reader'):
         endpoint = ET.SubElement(root, q % kind, {
             'profile_name': 'py_vision_udp_%s' % kind.split('_')[1],
@@ -278,8 +304,11 @@ def shm_receive_breaks(environ=os.environ):
     Which 2.6 patch release runs cannot be told before it is loaded: every 2.6 counts (2.6.0,
     the boards', to 2.6.5 have the defect).
     """
-    if environ.get(SHM_RECEIVE_SETTING) == '1':
-        return False
+    return environ.get(SHM_RECEIVE_SETTING) != '1' and fast_dds_2_6()
+
+
+def fast_dds_2_6():
+    """Return True where rmw_fastrtps is 6 (Humble's), which runs on Fast DDS 2.6."""
     try:
         with open(os.path.join(get_package_share_directory(_RMW_PACKAGE), 'package.xml')) as xml:
             version = ET.parse(xml).getroot().findtext('version', '')
@@ -300,7 +329,7 @@ def _holds(path, text):
 
 
 def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.environ,
-                         image_topics=()):
+                         image_topics=None):
     """
     Point Fast DDS at the packaged profile tailored to a node; return its path, or None.
 
@@ -308,8 +337,8 @@ def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.env
     node's command line (default sys.argv), where OWN_SIZE and INPUT_SIZE read the frame size;
     image_topics: the resolved topics whose images the node reads. On Fast DDS 2.6
     (shm_receive_breaks) the node then receives through shared memory on these topics alone,
-    everything else (discovery, services, other topics) through UDP; None: the node's topics
-    could not be told, and it receives through shared memory as Fast DDS would.
+    everything else (discovery, services, other topics) through UDP (none: the node reads no
+    images); None: not told, it receives through shared memory as Fast DDS would.
     Left alone (None): another RMW is selected, the user set a profile file, or Fast DDS would
     load DEFAULT_FASTRTPS_PROFILES.xml from the working directory.
     """
@@ -324,16 +353,22 @@ def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.env
         segment = segment_size(publishes, sys.argv if args is None else args, node_name)
         udp = image_topics is not None and shm_receive_breaks(environ)
         shm_topics = tuple(image_topics or ()) if udp else ()
-        path = tailor(path, segment, localhost_only(environ), udp_receive=udp,
-                      shm_topics=shm_topics)
+        _chosen['port'] = None
+        try:
+            path = tailor(path, segment, localhost_only(environ), udp_receive=udp,
+                          shm_topics=shm_topics)
+        except OSError as error:  # no room or no right in the temporary directory
+            sys.stderr.write('py_vision: Fast DDS keeps its own settings: cannot write the '
+                             "node's profile copy (%s)\n" % error)
+            return None
         environ[USER_SETTING] = path
         _chosen.update(segment=segment, shm_topics=shm_topics,
-                       linger=udp and publishes != NO_IMAGES)
+                       linger=fast_dds_2_6() and publishes != NO_IMAGES)
     return path
 
 
 # What use_packaged_profile() gave this process.
-_chosen = {'segment': None, 'shm_topics': (), 'linger': False}
+_chosen = {'segment': None, 'shm_topics': (), 'linger': False, 'port': None}
 # How long a node that published images through shared memory on Fast DDS 2.6 keeps its
 # participant after its last frame: a reader that got its first frame from it just before
 # reads it while the segment it is in still exists (else that reader's port is dead for good).
@@ -343,6 +378,33 @@ LINGER_S = 0.25
 def linger_s():
     """Return the seconds to wait between a node's last frame and its participant's end."""
     return LINGER_S if _chosen['linger'] else 0.0
+
+
+def lost_port():
+    """
+    Return the UDP port this process' endpoints were given if no socket of it holds it, or None.
+
+    Asked once the first node exists: another process that bound the port between its choice
+    and Fast DDS' own bind leaves every endpoint but the image readers unheard.
+    """
+    port = _chosen['port']
+    if port is None:
+        return None
+    try:
+        own = set()
+        for fd in os.listdir('/proc/self/fd'):
+            try:
+                target = os.readlink('/proc/self/fd/%s' % fd)
+            except OSError:
+                continue
+            if target.startswith('socket:['):
+                own.add(target[8:-1])
+        with open('/proc/self/net/udp') as table:
+            rows = [line.split() for line in table.readlines()[1:]]
+    except OSError:
+        return None  # cannot tell
+    held = any(int(row[1].rsplit(':', 1)[1], 16) == port and row[9] in own for row in rows)
+    return None if held else port
 
 
 def shm_topics():

@@ -289,7 +289,7 @@ def run(node_class: Type[NodeProgram], args=None) -> int:
             node = node_class.__new__(node_class)
             node.__init__()
             built = True
-            _check_image_topics(node, image_topics)
+            _check_transport(node, image_topics)
             executor.add_node(node)
             stop_guard = node.create_guard_condition(lambda: None)
             _Stopping.wake = stop_guard.trigger
@@ -334,14 +334,30 @@ def _image_topics(node_class: Type[NodeProgram], argv: Sequence[str]) -> Tuple[s
     if node_class.IMAGE_INPUT is None:
         return ()
     name = ros_arguments.node_name(argv, node_class.NODE_NAME)
-    return transport.image_topics(ros_arguments.topic_name(argv, node_class.IMAGE_INPUT, name))
+    raw, *others = transport.image_topics(
+        ros_arguments.topic_name(argv, node_class.IMAGE_INPUT, name))
+    # The others are subscribed to by their full name (the base's, resolved, and a suffix),
+    # which rcl resolves again: a rule for /base/compressed applies to it.
+    return (raw,) + tuple(ros_arguments.topic_name(argv, topic, name) for topic in others)
 
 
 _IMAGE_TYPES = ('Image', 'CompressedImage', 'CompressedVideo')
 
 
-def _check_image_topics(node, image_topics: Tuple[str, ...]) -> None:
-    """Warn of an image subscription that dds did not give shared memory (Fast DDS 2.6 only)."""
+def _check_transport(node, image_topics: Tuple[str, ...]) -> None:
+    """
+    Say what of dds' profile did not hold, once the node exists (Fast DDS 2.6 only).
+
+    An error when the UDP port its endpoints were given was taken by another process before
+    Fast DDS bound it (nobody can then reach the node); a warning for an image subscription on a
+    topic dds did not give shared memory (its frames come through UDP).
+    """
+    port = dds.lost_port()
+    if port is not None:
+        node.get_logger().error(
+            'UDP port %d, on which this node receives everything but images, was taken by '
+            'another process as the node started: nothing (ros2 param, the panel, the graph) '
+            'can reach it; restart it (docs/boards.md, "A node nobody hears")' % port)
     if not dds.shm_topics():
         return
     for subscription in node.subscriptions:
@@ -350,8 +366,7 @@ def _check_image_topics(node, image_topics: Tuple[str, ...]) -> None:
             node.get_logger().warning(
                 'frames on %s come through UDP, not shared memory: on Fast DDS 2.6 only the '
                 'topics read off the command line (%s) are (docs/boards.md, "A node nobody '
-                'hears"); remap usb_camera/image with -r rather than with a substitution' % (
-                    subscription.topic_name, ', '.join(image_topics[:2])))
+                'hears")' % (subscription.topic_name, ', '.join(image_topics[:2])))
 
 
 class CallbackFailures:

@@ -79,6 +79,8 @@ _INT64 = (-2 ** 63, 2 ** 63 - 1)
 _WILDCARDS = {'/*': '(/[A-Za-z0-9_]+)', '/**': '(/[A-Za-z0-9_]+)*'}
 _SMALLEST_NORMAL = 2.2250738585072014e-308
 PARAMS_KEY = 'ros__parameters'
+# A remapping rule's left side: [NODE:][rostopic://|rosservice://]NAME (a name has no ':').
+_TOPIC_RULE = re.compile(r'(?:([^:/]+):(?!//))?(?:(rostopic|rosservice)://)?([^:]*)$')
 
 
 class UnreadableArguments(ValueError):
@@ -155,12 +157,13 @@ def topic_name(argv: Sequence[str], topic: str, fully_qualified_name: str) -> st
     for flag, rule in _flags(argv):
         if flag not in ('-r', '--remap') or ':=' not in rule:
             continue
-        match, replacement = rule.split(':=', 1)
-        target, _, match = match.rpartition(':')
-        if (target and target != name) or match in ('__node', '__name', '__ns'):
+        found = _TOPIC_RULE.match(rule.split(':=', 1)[0])
+        target, kind, match = found.groups() if found else (None, 'rosservice', '')
+        if ((target and target != name) or kind == 'rosservice'
+                or match in ('__node', '__name', '__ns')):
             continue
         if _expand(match, name, namespace) == resolved:
-            return _expand(replacement, name, namespace)
+            return _expand(rule.split(':=', 1)[1], name, namespace)
     return resolved
 
 

@@ -14,16 +14,25 @@
 
 """The packaged Fast DDS profile: used by default, never over a user's choice, fit to the node."""
 
+import os
 from pathlib import Path
+import socket
 import xml.etree.ElementTree as ET
 
 from py_vision import dds
+import pytest
 import ros_harness
 
 NS = '{http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles}'
 VGA_BYTES = 640 * 480 * 3
 LIMITS = {'sendBufferSize': '/proc/sys/net/core/wmem_max',
           'receiveBufferSize': '/proc/sys/net/core/rmem_max'}
+
+
+@pytest.fixture(autouse=True)
+def own_choices(monkeypatch):
+    """Keep what each test makes dds choose (dds._chosen) from the tests that follow."""
+    monkeypatch.setattr(dds, '_chosen', dict(dds._chosen))
 
 
 def udp(path):
@@ -281,3 +290,39 @@ def test_on_fast_dds_2_6_nodes_receive_over_udp_but_images_unless_turned_off(
     assert not dds.shm_receive_breaks(env)
     assert listening(dds.use_packaged_profile(
         dds.OWN_SIZE, [], 'usbcam_publisher', env, image_topics=())) == SHM_AND_UDP
+
+
+def test_a_copy_with_a_port_is_the_process_own(tmp_path, monkeypatch):
+    monkeypatch.setenv('TMPDIR', str(tmp_path))
+    # One left by a killed process (no such pid) goes; a running process' stays.
+    dead = tmp_path / ('py_vision_fastdds_%d_pid%d.xml' % (os.getuid(), 2 ** 22 + 1))
+    alive = tmp_path / ('py_vision_fastdds_%d_pid%d.xml' % (os.getuid(), os.getppid()))
+    dead.write_text('<profiles/>')
+    alive.write_text('<profiles/>')
+    path = dds.tailor(dds.packaged_profile(), dds.SMALL_SEGMENT, udp_receive=True,
+                      shm_topics=('/image',))
+    assert Path(path).name == 'py_vision_fastdds_%d_pid%d.xml' % (os.getuid(), os.getpid())
+    assert not dead.exists() and alive.exists()
+    assert ('data_reader', '/image') in endpoints(path)
+
+
+def test_a_port_taken_before_fast_dds_bound_it_is_told(monkeypatch):
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as held:
+        held.bind(('', 0))
+        port = held.getsockname()[1]
+        monkeypatch.setitem(dds._chosen, 'port', port)
+        assert dds.lost_port() is None  # this process holds it
+    # Nobody holds it now (or another process would): the endpoints hear nothing.
+    assert dds.lost_port() == port
+    monkeypatch.setitem(dds._chosen, 'port', None)
+    assert dds.lost_port() is None  # no port given (Jazzy, or a node reading no images)
+
+
+def test_a_copy_that_cannot_be_written_leaves_fast_dds_alone(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv('TMPDIR', str(tmp_path / 'missing'))
+    env = {}
+    assert dds.use_packaged_profile(dds.OWN_SIZE, [], 'usbcam_publisher', env) is None
+    assert env == {}
+    said = capsys.readouterr().err
+    assert said.count('\n') == 1 and "cannot write the node's profile copy" in said

@@ -82,13 +82,20 @@ def test_a_viewer_receives_frames_and_nothing_else_through_shared_memory(ros_env
         assert camera.pid in owners, (
             'no frame came through shared memory: the viewer maps no segment of the camera '
             '(pid %d): %s\n%s\n%s' % (camera.pid, owners, viewer.tail(), camera.tail()))
+        # Its profile copy: its own on Humble (a UDP port of its own in it), there while it runs.
+        copy = Path(ros_env.get('TMPDIR') or '/tmp', 'py_vision_fastdds_%d_pid%d.xml' % (
+            os.getuid(), viewer.pid))
         if ros_harness.ON_HUMBLE:
             assert owners <= {viewer.pid, camera.pid}, (
                 'the viewer received through shared memory from other processes (this test '
                 'is pid %d): %s\n%s' % (os.getpid(), owners, viewer.tail()))
+            assert copy.is_file(), 'no %s\n%s' % (copy, viewer.tail())
         else:
             assert os.getpid() in owners, (
                 "on Fast DDS 2.14 the test's calls come through shared memory: %s" % owners)
+        assert viewer.stop() == 0
+        assert not copy.exists(), 'the viewer left %s behind' % copy
+        assert 'was taken by another process' not in viewer.output()
     finally:
         peer.close()
         viewer.kill()
@@ -103,6 +110,9 @@ class Recorder:
 
     def warning(self, text):
         self.warnings.append(text)
+
+    def error(self, text):
+        self.warnings.append('error: ' + text)
 
 
 class Subscribed:
@@ -123,14 +133,26 @@ def test_an_image_subscription_dds_did_not_give_shared_memory_is_said(monkeypatc
     # get its frames through UDP, slowly, without a word. It says so.
     predicted = ('/usb_camera/image', '/usb_camera/image/compressed')
     monkeypatch.setattr(dds, 'shm_topics', lambda: predicted)
+    monkeypatch.setattr(dds, 'lost_port', lambda: None)
     node = Subscribed((Image, '/usb_camera/image'), (CompressedImage, '/cam/compressed'))
-    node_main._check_image_topics(node, predicted)
+    node_main._check_transport(node, predicted)
     (said,) = node.logger.warnings
     assert said.startswith('frames on /cam/compressed come through UDP')
     # The topics it was given, or Fast DDS not split (Jazzy, or a user's profile): nothing.
     node = Subscribed((Image, '/usb_camera/image'), (CompressedImage, predicted[1]))
-    node_main._check_image_topics(node, predicted)
+    node_main._check_transport(node, predicted)
     monkeypatch.setattr(dds, 'shm_topics', lambda: ())
     other = Subscribed((Image, '/cam/image'))
-    node_main._check_image_topics(other, predicted)
+    node_main._check_transport(other, predicted)
     assert node.logger.warnings == other.logger.warnings == []
+
+
+def test_a_node_whose_udp_port_was_taken_says_nobody_can_reach_it(monkeypatch):
+    # dds picks the port before rclpy starts; another process may bind it before Fast DDS
+    # does (test_dds: dds.lost_port), and the node would be "a node nobody hears", silently.
+    monkeypatch.setattr(dds, 'lost_port', lambda: 7777)
+    monkeypatch.setattr(dds, 'shm_topics', lambda: ())
+    node = Subscribed((Image, '/usb_camera/image'))
+    node_main._check_transport(node, ())
+    (said,) = node.logger.warnings
+    assert said.startswith('error: UDP port 7777') and 'restart it' in said

@@ -100,6 +100,22 @@ class LanePeer:
         self.node_peer = ros_harness.RosPeer(self.domain_id, name='%s_%d' % (
             self.name, self.count))
 
+    def call(self, call, node_name, *args, why=''):
+        """
+        Return what the call answers; on Humble, through a new peer if this one hears nothing.
+
+        The node listens on UDP there (but for its images): when the call gets no answer it is
+        the peer that hears nothing (its own shared-memory port stopped). A new peer must reach
+        the node.
+        """
+        try:
+            return call(self.node_peer, node_name, *args)
+        except Unreached as error:
+            if not ros_harness.ON_HUMBLE:
+                raise
+            self.replace('%s: %s' % (why, error))
+            return call(self.node_peer, node_name, *args)
+
     def close(self):
         """Close the current peer."""
         if self.node_peer is not None:
@@ -114,20 +130,11 @@ def one_round(lane, number, rng, env, peer):
         executable, ros_harness.ros_args(RUNNABLE[executable], remaps), env,
         name='%s_%d' % (node_name, number))
     try:
-        (first_name, first_value), *others = SETS[executable]
-        try:
-            set_parameter(peer.node_peer, node_name, first_name, first_value)
-        except Unreached as error:
-            if not ros_harness.ON_HUMBLE:
-                raise
-            # The node listens on UDP (but for its images): it is the peer that hears nothing
-            # (its own shared-memory port stopped). A new peer must reach the node.
-            peer.replace('%s round %d: %s' % (node_name, number, error))
-            set_parameter(peer.node_peer, node_name, first_name, first_value)
-        for name, value in others:
-            set_parameter(peer.node_peer, node_name, name, value)
-        get_parameters(peer.node_peer, node_name, READ[executable])
-        describe_parameters(peer.node_peer, node_name, READ[executable])
+        why = '%s round %d' % (node_name, number)
+        for name, value in SETS[executable]:
+            peer.call(set_parameter, node_name, name, value, why=why)
+        peer.call(get_parameters, node_name, READ[executable], why=why)
+        peer.call(describe_parameters, node_name, READ[executable], why=why)
         delay = rng.uniform(0.0, 0.5)
         time.sleep(delay)  # the random moment itself, not a synchronisation
         what = '%s round %d, %s %.2f s after the last parameter call' % (

@@ -28,7 +28,7 @@ import os
 import tempfile
 
 from hypothesis import assume, given, HealthCheck, settings, strategies as st
-from py_vision import ros_arguments
+from py_vision import node_main, ros_arguments
 from py_vision.ros_arguments import (
     given_parameters, node_name, parameters_file, scalar, topic_name, UnreadableArguments,
     without_parameters)
@@ -221,6 +221,10 @@ TOPIC_REMAPS = [
     ['-r', '__node:=viewer', '-r', 'viewer:usb_camera/image:=renamed'],
     ['-r', 'usb_camera/image:=first', '-r', 'usb_camera/image:=second'],
     ['-r', 'usb_camera/other:=x', '-r', '__ns:=/a/b'], ['-r', 'usb_camera/image:=~/own'],
+    ['-r', 'rostopic://usb_camera/image:=/t'], ['-r', 'rosservice://usb_camera/image:=/s'],
+    ['-r', 'usbcam_publisher:rostopic://usb_camera/image:=/u'],
+    ['-r', '/usb_camera/image/compressed:=/cam/jpeg'],
+    ['-r', 'usb_camera/image:=/left/image', '-r', '/left/image/compressed:=/left/jpeg'],
 ]
 
 
@@ -232,11 +236,17 @@ def test_a_topic_resolves_as_rcl_resolves_it(context, remaps):
                              start_parameter_services=False)
     try:
         expected = node.resolve_topic_name('usb_camera/image')
+        # A transport's topic is subscribed to by its full name, which rcl resolves again.
+        compressed = node.resolve_topic_name(expected + '/compressed')
         fqn = node.get_fully_qualified_name()
     finally:
         node.destroy_node()
     assert node_name(argv(*remaps), NODE) == fqn
     assert topic_name(argv(*remaps), 'usb_camera/image', fqn) == expected
+    # What node_main gives dds: the raw topic first, then the others (transport.image_topics).
+    reader = type('Reader', (), {'NODE_NAME': NODE, 'IMAGE_INPUT': 'usb_camera/image'})
+    raw, given_compressed, *video = node_main._image_topics(reader, argv(*remaps))
+    assert (raw, given_compressed) == (expected, compressed)
 
 
 # --- what node_main gives rclpy: the node gets exactly what ros_arguments read ---------------
