@@ -61,11 +61,17 @@ def test_auto_reaches_720p_at_30_fps_through_mjpeg(launch, peer):
         'video_device': 'synthetic', 'image_width': 1280, 'image_height': 720,
         'framerate': 30.0})
     publisher.wait_for_output(r'1280x720 MJPG at 30 fps', 20)
-    wait_until(lambda: len(received) >= 90, 40, what='90 compressed frames')
-    frames = list(received)[-60:]
-    # Capture stamps measure the camera's rate, whatever the load on this machine.
-    rate = (len(frames) - 1) / (stamp_s(frames[-1]) - stamp_s(frames[0]))
-    assert rate >= 28.0, 'delivered %.1f fps' % rate
+    wait_until(lambda: len(received) >= 30, 40, what='30 compressed frames')
+    frames = list(received)[-30:]
+    # The camera's rate from capture stamps and frame indices: a frame this loaded machine
+    # did not keep up with is skipped (its index too), not stamped late, so what is measured is
+    # the camera, 30 fps in MJPG (YUYV's bus gives 10 at 720p), not the machine's spare time.
+    indexes = [read_frame_index(decode(m)) for m in frames]
+    assert None not in indexes, 'frames without their index: %s' % indexes
+    periods = [(stamp_s(b) - stamp_s(a)) / (j - i)
+               for a, b, i, j in zip(frames, frames[1:], indexes, indexes[1:]) if j > i]
+    rate = 1.0 / float(np.median(periods))
+    assert 29.0 < rate < 31.0, 'the camera gives %.1f fps' % rate
 
 
 def test_yuyv_at_720p_is_bus_limited_and_says_so(launch, peer):
