@@ -210,3 +210,48 @@ def test_the_panel_shows_and_sets_the_processing_step_s_parameters(launch, peer,
                '20', 10, interval=0.1, what='the page to show the step parameter at 20')
     assert page.locator('#control-step-simulated_work_ms .note').inner_text() == ''
     assert processing.proc.poll() is None and 'Traceback' not in processing.output()
+
+
+def test_a_value_on_its_way_to_the_node_is_not_put_back_by_a_poll(launch, peer, browser):
+    # The panel polls /camera about once a second. A value the user set is on its way (its POST
+    # unanswered) when a poll answer still holds the old one: the slider keeps what the user set
+    # (once seen put back on a loaded machine, where the node took a while to answer).
+    from param_client import get_parameters
+    launch('usbcam_publisher', params={'video_device': 'synthetic', 'framerate': 15.0})
+    subscriber = launch('usbcam_subscriber', params={'display': 'web', 'web_port': 0})
+    url = subscriber.wait_for_output(URL_LINE).group(1)
+    page = browser.new_page()
+    held = []  # the POSTs of control values, held back until the test lets them go
+    page.route('**/camera/controls', lambda route: held.append(route)
+               if route.request.method == 'POST' else route.continue_())
+    polls = []
+    page.on('response', lambda response: polls.append(response)
+            if response.url.endswith('/camera') else None)
+    page.goto(url)
+    slider = page.locator('#input-brightness')
+    slider.wait_for(state='visible', timeout=30000)
+    before = slider.input_value()
+    low, high = (float(slider.get_attribute(name)) for name in ('min', 'max'))
+    box = slider.bounding_box()
+    page.mouse.click(box['x'] + box['width'] * 0.8, box['y'] + box['height'] / 2)
+    value = slider.input_value()
+    assert value != before and float(value) > (low + high) / 2
+    # (page.evaluate lets Playwright deliver the page's events to this thread.)
+    wait_until(lambda: page.evaluate('1') and held, 10, interval=0.05,
+               what="the slider's POST")
+    # Two poll answers after the POST left: both say the node still has the old value.
+    seen = len(polls)
+    wait_until(lambda: page.evaluate('1') and len(polls) >= seen + 2, 10, interval=0.1,
+               what='two polls of /camera')
+    assert get_parameters(peer, 'usbcam_publisher', ['brightness'])[0].integer_value == int(
+        before), 'the node took the value before the test let it go'
+    assert slider.input_value() == value, 'a poll put the old value back while it was sent'
+    # Let it go: the node takes it, and the slider and the value shown agree with it.
+    for route in held:
+        route.continue_()
+    wait_until(lambda: get_parameters(peer, 'usbcam_publisher', ['brightness'])[0]
+               .integer_value == int(value), 10, interval=0.1,
+               what='brightness %s on the publisher' % value)
+    wait_until(lambda: page.evaluate('1') and page.locator('#control-brightness .value')
+               .inner_text() == value, 10, interval=0.1, what='the value shown')
+    assert slider.input_value() == value
