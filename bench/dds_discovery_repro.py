@@ -270,21 +270,11 @@ def fast_dds_segments():
 
 
 def udp_ports(pid):
-    """Return the local UDP ports a process has sockets on."""
-    inodes = set()
-    try:
-        for fd in os.listdir('/proc/%d/fd' % pid):
-            try:
-                target = os.readlink('/proc/%d/fd/%s' % (pid, fd))
-            except OSError:
-                continue
-            if target.startswith('socket:['):
-                inodes.add(target[8:-1])
-        with open('/proc/%d/net/udp' % pid) as table:
-            rows = [line.split() for line in table.readlines()[1:]]
-    except OSError:
-        return []
-    return sorted({int(row[1].split(':')[1], 16) for row in rows if row[9] in inodes})
+    """Return the local UDP ports a process has sockets on (py_vision.dds reads them)."""
+    sys.path.insert(0, str(BENCH))
+    import bench_common  # noqa: F401 (puts the installed py_vision on sys.path)
+    from py_vision import dds
+    return sorted(dds.udp_ports(pid) or ())
 
 
 def shm_ports(pid=None):

@@ -153,7 +153,7 @@ def _kernel_limit(path):
 
 
 def tailor(profile, segment=None, localhost=False, limits=None, udp_receive=False,
-           shm_topics=()):
+           shm_topics=(), endpoint_port=None):
     """
     Return the path of a copy of profile tailored to one node, or profile itself if unchanged.
 
@@ -163,7 +163,7 @@ def tailor(profile, segment=None, localhost=False, limits=None, udp_receive=Fals
     participant listens on UDP locators only (discovery and data), none of shared memory, which
     it still sends through; shm_topics: with udp_receive, the topics (resolved names) whose
     readers still listen on shared memory (and UDP), alone on the participant's shared-memory
-    port.
+    port, every other endpoint on UDP endpoint_port (None: one free_udp_port() picks).
     """
     if limits is None:
         limits = {tag: _kernel_limit(path) for tag, path in _KERNEL_LIMITS.items()}
@@ -192,7 +192,9 @@ def tailor(profile, segment=None, localhost=False, limits=None, udp_receive=Fals
             descriptor.insert(list(descriptor).index(descriptor.find(q % 'type')) + 1, allowed)
             changed = True
     if udp_receive:
-        _receive_over_udp(tree.getroot(), q, shm_topics)
+        if shm_topics and endpoint_port is None:
+            endpoint_port = free_udp_port()
+        _receive_over_udp(tree.getroot(), q, shm_topics, endpoint_port)
         changed = True
     if not changed:
         return profile
@@ -207,13 +209,16 @@ def tailor(profile, segment=None, localhost=False, limits=None, udp_receive=Fals
         os.getuid(), zlib.crc32(fitted.encode())))
     if not _holds(path, fitted):
         partial = '%s.%d' % (path, os.getpid())
-        if os.path.lexists(partial):  # left by a killed process that had this pid
-            os.unlink(partial)
-        # Created here, never an existing file or link in the shared directory.
-        with os.fdopen(os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644), 'w') as out:
-            out.write(fitted)
+        _write_new(partial, fitted)
         os.replace(partial, path)
     return path
+
+
+def _write_new(path, text):
+    """Write text to path, a file created here: never an existing file or link there."""
+    _remove(path)  # left by a killed process that had this pid
+    with os.fdopen(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644), 'w') as out:
+        out.write(text)
 
 
 _OWN_COPY = 'py_vision_fastdds_%d_pid%d.xml'
@@ -234,10 +239,7 @@ def _own_copy(fitted):
             if not os.path.exists('/proc/%s' % pid):
                 _remove(os.path.join(directory, name))
     path = os.path.join(directory, _OWN_COPY % (os.getuid(), os.getpid()))
-    _remove(path)  # left by a killed process that had this pid
-    # Created here, never an existing file or link in the shared directory.
-    with os.fdopen(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644), 'w') as out:
-        out.write(fitted)
+    _write_new(path, fitted)
     atexit.register(_remove, path)
     return path
 
@@ -249,7 +251,7 @@ def _remove(path):
         pass
 
 
-def _receive_over_udp(root, q, shm_topics=()):
+def _receive_over_udp(root, q, shm_topics=(), endpoint_port=None):
     """
     Give the profile UDPv4 locators to listen on, and so none of shared memory.
 
@@ -260,9 +262,11 @@ def _receive_over_udp(root, q, shm_topics=()):
     """
     rtps = root.find('%s/%s' % (q % 'participant', q % 'rtps'))
 
-    def udp_list(parent, name, address=None):
+    def udp_list(parent, name, address=None, port=None):
         locator = ET.SubElement(ET.SubElement(parent, q % name), q % 'locator')
         udp = ET.SubElement(locator, q % 'udpv4')
+        if port is not None:
+            ET.SubElement(udp, q % 'port').text = str(port)
         if address is not None:
             ET.SubElement(udp, q % 'address').text = address
     # No address, no port: every allowed interface, the participant's well-known ports.
@@ -275,15 +279,11 @@ def _receive_over_udp(root, q, shm_topics=()):
         return
     # A port of its own: with port 0, Fast DDS 2.6.0 computes one from a participant id not yet
     # given at that point, and the endpoints hear nothing.
-    port = free_udp_port()
-    _chosen['port'] = port
-    port = str(port)
     for kind in ('data_writer', 'data_reader'):
         endpoint = ET.SubElement(root, q % kind, {
             'profile_name': 'py_vision_udp_%s' % kind.split('_')[1],
             'is_default_profile': 'true'})
-        udp_list(endpoint, 'unicastLocatorList')
-        ET.SubElement(endpoint.find('.//' + q % 'udpv4'), q % 'port').text = port
+        udp_list(endpoint, 'unicastLocatorList', port=endpoint_port)
     for topic in shm_topics:
         reader = ET.SubElement(root, q % 'data_reader', {'profile_name': topic})
         # As rmw_fastrtps sets it; an element, since an empty profile is not one to Fast DDS.
@@ -353,16 +353,16 @@ def use_packaged_profile(publishes=None, args=None, node_name='', environ=os.env
         segment = segment_size(publishes, sys.argv if args is None else args, node_name)
         udp = image_topics is not None and shm_receive_breaks(environ)
         shm_topics = tuple(image_topics or ()) if udp else ()
-        _chosen['port'] = None
         try:
+            port = free_udp_port() if shm_topics else None
             path = tailor(path, segment, localhost_only(environ), udp_receive=udp,
-                          shm_topics=shm_topics)
+                          shm_topics=shm_topics, endpoint_port=port)
         except OSError as error:  # no room or no right in the temporary directory
             sys.stderr.write('py_vision: Fast DDS keeps its own settings: cannot write the '
                              "node's profile copy (%s)\n" % error)
             return None
         environ[USER_SETTING] = path
-        _chosen.update(segment=segment, shm_topics=shm_topics,
+        _chosen.update(segment=segment, shm_topics=shm_topics, port=port,
                        linger=fast_dds_2_6() and publishes != NO_IMAGES)
     return path
 
@@ -388,23 +388,28 @@ def lost_port():
     and Fast DDS' own bind leaves every endpoint but the image readers unheard.
     """
     port = _chosen['port']
-    if port is None:
+    held = udp_ports()
+    if port is None or held is None or port in held:  # None: cannot tell
         return None
+    return port
+
+
+def udp_ports(pid='self'):
+    """Return the local UDP (IPv4) ports a process has sockets on, or None if unreadable."""
+    inodes = set()
     try:
-        own = set()
-        for fd in os.listdir('/proc/self/fd'):
+        for fd in os.listdir('/proc/%s/fd' % pid):
             try:
-                target = os.readlink('/proc/self/fd/%s' % fd)
+                target = os.readlink('/proc/%s/fd/%s' % (pid, fd))
             except OSError:
                 continue
             if target.startswith('socket:['):
-                own.add(target[8:-1])
-        with open('/proc/self/net/udp') as table:
+                inodes.add(target[8:-1])
+        with open('/proc/%s/net/udp' % pid) as table:
             rows = [line.split() for line in table.readlines()[1:]]
     except OSError:
-        return None  # cannot tell
-    held = any(int(row[1].rsplit(':', 1)[1], 16) == port and row[9] in own for row in rows)
-    return None if held else port
+        return None
+    return {int(row[1].rsplit(':', 1)[1], 16) for row in rows if row[9] in inodes}
 
 
 def shm_topics():

@@ -157,13 +157,14 @@ def topic_name(argv: Sequence[str], topic: str, fully_qualified_name: str) -> st
     for flag, rule in _flags(argv):
         if flag not in ('-r', '--remap') or ':=' not in rule:
             continue
-        found = _TOPIC_RULE.match(rule.split(':=', 1)[0])
+        left, replacement = rule.split(':=', 1)
+        found = _TOPIC_RULE.match(left)
         target, kind, match = found.groups() if found else (None, 'rosservice', '')
         if ((target and target != name) or kind == 'rosservice'
                 or match in ('__node', '__name', '__ns')):
             continue
         if _expand(match, name, namespace) == resolved:
-            return _expand(rule.split(':=', 1)[1], name, namespace)
+            return _expand(replacement, name, namespace)
     return resolved
 
 
