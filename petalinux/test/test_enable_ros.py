@@ -17,9 +17,10 @@ petalinux/enable_ros.py on PetaLinux 2023.2 project skeletons of the three board
 
 The skeletons (fixtures/<board>/) hold what petalinux-create and the Avnet board scripts leave:
 the project settings, a long Kconfig rootfs_config with its menu banners, 'is not set' lines
-and user packages block, and a user-rootfsconfig with the PetaLinux note and the board's own
-packages. Each test derives a starting state from them, runs the tool as a user would, and
-checks the result with petalinux_model (what PetaLinux and Kconfig read), line by line.
+and user packages block, a user-rootfsconfig with the PetaLinux note and the board's own
+packages, and the meta-user layer's conf/layer.conf as PetaLinux 2023.2 writes it. Each test
+derives a starting state from them, runs the tool as a user would, and checks the result with
+petalinux_model (what PetaLinux, Kconfig and bitbake read), line by line.
 """
 
 import difflib
@@ -40,13 +41,27 @@ FIXTURES = HERE / 'fixtures'
 USER = Path('project-spec/meta-user/conf/user-rootfsconfig')
 ROOTFS = Path('project-spec/configs/rootfs_config')
 CONFIG = Path('project-spec/configs/config')
+META_USER = Path('project-spec/meta-user')
+LAYER_CONF = META_USER / 'conf' / 'layer.conf'
+LAYER_SOURCE = HERE.parent / 'meta-user'
 
 # The tutorial's eight packages, then what py_vision runs on whatever they bring (OpenCV's and
-# numpy's Python modules, PyYAML), xauth for ssh -X windows and vision-msgs for the faces
-# step's detections: every board's fragments hold these today, in this order.
+# numpy's Python modules, PyYAML), xauth for ssh -X windows, vision-msgs for the faces step's
+# detections and the TensorFlow Lite runtime of the model steps: every board's fragments hold
+# these today, in this order.
 TUTORIAL = ['packagegroup-petalinux-ros', 'packagegroup-petalinux-ros-dev', 'cv-bridge',
             'cv-bridge-dev', 'v4l2-camera', 'v4l2-camera-dev', 'turtlesim', 'turtlesim-dev']
-RUNTIME = ['python3-opencv', 'python3-numpy', 'python3-pyyaml', 'xauth', 'vision-msgs']
+RUNTIME = ['python3-opencv', 'python3-numpy', 'python3-pyyaml', 'xauth', 'vision-msgs',
+           'python3-tflite-runtime']
+# The files the tool places in the project's meta-user layer: the runtime's recipe, and the
+# bbappend of meta-ros' Fast DDS recipe with the upstream patch it applies.
+RECIPE = 'recipes-python/python3-tflite-runtime/python3-tflite-runtime_2.14.0.bb'
+BBAPPEND = 'recipes-ros/fastrtps/fastrtps_2.6.0-3.bbappend'
+PATCH = ('recipes-ros/fastrtps/files/'
+         '0001-Improve-SHM-resilience-to-crashing-participants-3765.patch')
+LAYER_FILES = [RECIPE, BBAPPEND, PATCH]
+# The Fast DDS recipe of PetaLinux 2023.2's meta-ros (branch rel-v2023.2, meta-ros2-humble).
+META_ROS_FASTRTPS = 'fastrtps_2.6.0-3.bb'
 PACKAGES = TUTORIAL + RUNTIME
 BOARDS = {'zub1cg': 'zub1cg-sbc-2023-2', 'u96v2': 'u96v2-sbc-2023-2',
           'uz7ev': 'uz7ev-evcc-2023-2'}
@@ -62,10 +77,11 @@ def load_tool():
 enable_ros = load_tool()
 
 
-def run_tool(*args):
+def run_tool(*args, umask=None):
     """Run the tool as a user does; return the CompletedProcess (text output)."""
     result = subprocess.run([sys.executable, str(TOOL)] + [str(a) for a in args],
-                            capture_output=True, text=True, timeout=30)
+                            capture_output=True, text=True, timeout=30,
+                            preexec_fn=None if umask is None else lambda: os.umask(umask))
     assert 'Traceback' not in result.stderr, result.stderr
     return result
 
@@ -116,6 +132,17 @@ def make_project(tmp_path, board, state):
     elif state == 'enabled':
         user += ''.join('CONFIG_%s\n' % name for name in PACKAGES)
         rootfs = block_entries(rootfs, {name: 'CONFIG_%s=y' % name for name in PACKAGES})
+        shutil.copytree(LAYER_SOURCE, project / META_USER, dirs_exist_ok=True)
+    elif state == 'apps_only_layer':
+        # A meta-user layer.conf edited to read its recipes-apps alone.
+        (project / LAYER_CONF).write_text(
+            'BBPATH .= ":${LAYERDIR}"\n'
+            'BBFILES += "${LAYERDIR}/recipes-apps/*/*.bb \\\n'
+            '\t${LAYERDIR}/recipes-apps/*/*.bbappend"\n'
+            'BBFILE_COLLECTIONS += "meta-user"\n'
+            'BBFILE_PATTERN_meta-user = "^${LAYERDIR}/"\n'
+            'BBFILE_PRIORITY_meta-user = "7"\n'
+            'LAYERSERIES_COMPAT_meta-user = "langdale"')
     elif state == 'tutorial':
         # Everything the tutorial says, done by hand before py_vision's own packages existed.
         user += ''.join('CONFIG_%s\n' % name for name in TUTORIAL)
@@ -126,6 +153,8 @@ def make_project(tmp_path, board, state):
                         r'\1# CONFIG_python3-numpy is not set\nCONFIG_xauth=n\n', rootfs, count=1)
     elif state == 'crlf':
         user, rootfs = user.replace('\n', '\r\n'), rootfs.replace('\n', '\r\n')
+        layer_conf = (project / LAYER_CONF).read_bytes()
+        (project / LAYER_CONF).write_bytes(layer_conf.replace(b'\n', b'\r\n'))
     elif state == 'messy':
         user += ('# CONFIG_cv-bridge is not set\n'  # pasted from rootfs_config: not cv-bridge
                  'CONFIG_cv-bridge\n'
@@ -147,14 +176,14 @@ def make_project(tmp_path, board, state):
 
 
 STATES = ['fresh', 'declared_not_set', 'commented', 'no_final_newline', 'no_block', 'enabled',
-          'tutorial', 'other_menu', 'crlf', 'messy']
+          'tutorial', 'other_menu', 'crlf', 'messy', 'apps_only_layer']
 
 
 # ---------------------------------------------------------------------------------------------
 # What a correct result looks like
 
 def assert_enabled(project):
-    """Assert PetaLinux declares and Kconfig enables every package exactly once."""
+    """Assert PetaLinux declares and Kconfig enables every package, bitbake reads the layer."""
     user = (project / USER).read_bytes()
     rootfs = (project / ROOTFS).read_bytes()
     declared = model.declarations(user)
@@ -166,6 +195,20 @@ def assert_enabled(project):
         assert installed.count(name) == 1, name
     lines = model.kconfig_lines(user)
     assert all('CONFIG_%s' % name in lines for name in PACKAGES)
+    assert_layer_in_place(project)
+
+
+def assert_layer_in_place(project):
+    """Assert the layer files are there as petalinux/meta-user has them, and bitbake reads them."""
+    for relative in LAYER_FILES:
+        assert (project / META_USER / relative).read_bytes() == (
+            LAYER_SOURCE / relative).read_bytes(), relative
+    read = model.bbfiles((project / LAYER_CONF).read_bytes(), project / META_USER)
+    assert str(project / META_USER / RECIPE) in read, read
+    assert str(project / META_USER / BBAPPEND) in read, read
+    appends = [Path(path).name for path in read if path.endswith('.bbappend')]
+    assert [name for name in appends if model.appends_to(name, META_ROS_FASTRTPS)] == [
+        Path(BBAPPEND).name]
 
 
 def raw_lines(data):
@@ -214,32 +257,53 @@ def assert_in_place(before, old, after, new):
 # ---------------------------------------------------------------------------------------------
 # Every board, every starting state
 
+def project_files(project):
+    """Return {path relative to the project: bytes} of every file of the project."""
+    return {path.relative_to(project): path.read_bytes()
+            for path in sorted(project.rglob('*')) if path.is_file()}
+
+
 @pytest.mark.parametrize('state', STATES)
 @pytest.mark.parametrize('board', sorted(BOARDS))
 def test_enables_every_state_and_is_idempotent(tmp_path, board, state):
     project = make_project(tmp_path, board, state)
-    before = {path: (project / path).read_bytes() for path in (USER, ROOTFS)}
+    before = project_files(project)
 
     check = run_tool(project, '--check')
     assert check.returncode == (0 if state == 'enabled' else 1), check.stdout
-    assert {path: (project / path).read_bytes() for path in before} == before
+    assert project_files(project) == before
 
     first = run_tool(project)
     assert first.returncode == 0, first.stderr
     assert 'board: %s' % board in first.stdout
     assert 'petalinux-config -c rootfs --silentconfig' in first.stdout
     assert_enabled(project)
-    after = {path: (project / path).read_bytes() for path in before}
-    for path in before:
+    after = project_files(project)
+    for path in (USER, ROOTFS):
         assert_only_package_lines_changed(before[path], after[path])
+    # The layer files are added, nothing else of the project is touched but for layer.conf,
+    # which only a layer.conf that does not pick up the recipes gets a BBFILES line in.
+    assert set(after) == set(before) | {META_USER / relative for relative in LAYER_FILES}
+    assert {path: data for path, data in after.items()
+            if path in before and path not in (USER, ROOTFS, LAYER_CONF)} == {
+        path: data for path, data in before.items() if path not in (USER, ROOTFS, LAYER_CONF)}
+    if state == 'apps_only_layer':
+        assert after[LAYER_CONF] == before[LAYER_CONF] + (
+            b'\nBBFILES += "${LAYERDIR}/recipes-*/*/*.bb ${LAYERDIR}/recipes-*/*/*.bbappend"\n')
+        assert 'layer.conf: BBFILES line appended' in first.stdout
+    else:
+        assert after[LAYER_CONF] == before[LAYER_CONF]
+        assert 'layer.conf: BBFILES already picks up the recipes' in first.stdout
     if state == 'enabled':
         assert after == before
         assert 'nothing to change' in first.stdout
+    else:
+        assert 'meta-user: placed 3 file(s), replaced 0, already 0' in first.stdout
 
     second = run_tool(project)
     assert second.returncode == 0
     assert 'nothing to change' in second.stdout
-    assert {path: (project / path).read_bytes() for path in before} == after
+    assert project_files(project) == after
     assert run_tool(project, '--check').returncode == 0
 
 
@@ -270,25 +334,27 @@ def test_is_not_set_lines_are_switched_in_place(tmp_path):
     # The tutorial's declarations stay as they are; py_vision's own packages are appended.
     assert (project / USER).read_bytes() == user_before + b''.join(
         b'CONFIG_%s\n' % name.encode() for name in RUNTIME)
-    assert 'user-rootfsconfig: declared 5, already 8' in result.stdout
-    assert 'rootfs_config: enabled 11, already 2' in result.stdout
+    assert 'user-rootfsconfig: declared 6, already 8' in result.stdout
+    assert 'rootfs_config: enabled 12, already 2' in result.stdout
 
 
 def test_a_tutorial_project_gets_exactly_what_py_vision_runs_on(tmp_path):
     # A project that followed the tutorial has the eight ROS packages and lacks OpenCV's and
-    # numpy's Python modules, PyYAML, xauth and vision-msgs as packages of its own.
+    # numpy's Python modules, PyYAML, xauth, vision-msgs and the TensorFlow Lite runtime as
+    # packages of its own, and py_vision's recipes.
     project = make_project(tmp_path, 'zub1cg', 'tutorial')
     check = run_tool(project, '--check')
     assert check.returncode == 1
     problems = [line.strip() for line in check.stdout.split('problem(s):')[1].splitlines()
                 if line.startswith('  ')]
     assert problems == (['user-rootfsconfig: %s: not declared' % name for name in RUNTIME]
-                        + ['rootfs_config: %s: not assigned' % name for name in RUNTIME])
+                        + ['rootfs_config: %s: not assigned' % name for name in RUNTIME]
+                        + ['meta-user: %s: missing' % relative for relative in LAYER_FILES])
     before = (project / ROOTFS).read_text().split('\n')
     result = run_tool(project)
     assert result.returncode == 0, result.stderr
-    assert 'user-rootfsconfig: declared 5, already 8' in result.stdout
-    assert 'rootfs_config: enabled 5, already 8' in result.stdout
+    assert 'user-rootfsconfig: declared 6, already 8' in result.stdout
+    assert 'rootfs_config: enabled 6, already 8' in result.stdout
     after = (project / ROOTFS).read_text().split('\n')
     start = after.index('# user packages ') + 2
     block = after[start:after.index('', start)]
@@ -468,6 +534,7 @@ def test_conflicting_board_flag_is_warned_about(tmp_path):
     ('no_user', 'user-rootfsconfig not found'),
     ('no_rootfs', 'rootfs_config not found'),
     ('rootfs_is_dir', 'is a directory'),
+    ('no_layer_conf', "the meta-user layer's layer.conf not found"),
 ])
 def test_missing_or_unreadable_files_are_clear_errors(tmp_path, breakage, message):
     project = make_project(tmp_path, 'zub1cg', 'fresh')
@@ -480,6 +547,8 @@ def test_missing_or_unreadable_files_are_clear_errors(tmp_path, breakage, messag
         (project / USER).unlink()
     elif breakage == 'no_rootfs':
         (project / ROOTFS).unlink()
+    elif breakage == 'no_layer_conf':
+        (project / LAYER_CONF).unlink()
     else:
         (project / ROOTFS).unlink()
         (project / ROOTFS).mkdir()
@@ -487,8 +556,9 @@ def test_missing_or_unreadable_files_are_clear_errors(tmp_path, breakage, messag
         result = run_tool(project, *extra)
         assert result.returncode == 2
         assert result.stderr.startswith('error: ') and message in result.stderr, result.stderr
-    if breakage == 'no_rootfs':  # nothing half-done: the declarations were not written either
+    if breakage in ('no_rootfs', 'no_layer_conf'):  # nothing half-done
         assert (project / USER).read_bytes() == user_before
+        assert not (project / META_USER / 'recipes-ros').exists()
 
 
 def test_check_and_dry_run_together_is_a_usage_error(tmp_path):
@@ -568,3 +638,217 @@ def test_broken_fragments_are_refused(tmp_path, content, message):
     path.write_text(content)
     with pytest.raises(enable_ros.ToolError, match=message):
         enable_ros.read_fragment(str(path), 'CONFIG_{}', 'fragment')
+
+
+# ---------------------------------------------------------------------------------------------
+# The meta-user layer: the recipes placed, layer.conf
+
+def test_the_layer_files_are_the_runtime_recipe_and_the_fast_dds_fix():
+    found = sorted(str(path.relative_to(LAYER_SOURCE)) for path in LAYER_SOURCE.rglob('*')
+                   if path.is_file())
+    assert found == sorted(LAYER_FILES)
+    recipe = (LAYER_SOURCE / RECIPE).read_text()
+    # One plain line each: another tool reads the wheel's address and checksum from them.
+    urls = re.findall(r'^SRC_URI = "(https://\S+)"$', recipe, re.M)
+    sums = re.findall(r'^SRC_URI\[sha256sum\] = "([0-9a-f]{64})"$', recipe, re.M)
+    assert len(urls) == 1 and len(sums) == 1, (urls, sums)
+    version = re.fullmatch(r'python3-tflite-runtime_(.+)\.bb', Path(RECIPE).name).group(1)
+    assert urls[0].startswith('https://files.pythonhosted.org/packages/')
+    assert urls[0].endswith('/tflite_runtime-%s-cp310-cp310-manylinux_2_34_aarch64.whl' % version)
+    assert re.search(r'^LICENSE = "Apache-2.0"$', recipe, re.M)
+    assert re.search(r'^LIC_FILES_CHKSUM = "file://\$\{COMMON_LICENSE_DIR\}/Apache-2.0;md5=',
+                     recipe, re.M)
+    assert re.search(r'^COMPATIBLE_HOST = "aarch64\.\*-linux"$', recipe, re.M)
+    rdepends = re.search(r'^RDEPENDS:\$\{PN\} \+= "([^"]*)"$', recipe, re.M).group(1).split()
+    assert {'python3-core', 'python3-numpy'} <= set(rdepends)
+    # The patch is eProsima's commit as git format-patch writes it, with its upstream status.
+    patch = (LAYER_SOURCE / PATCH).read_text()
+    assert patch.startswith('From df904f302a443c64ea4b542e8fd486f58be50a47 ')
+    assert 'Subject: [PATCH] Improve SHM resilience to crashing participants (#3765)' in patch
+    assert re.search(r'^Upstream-Status: Backport \[https://github.com/eProsima/Fast-DDS/'
+                     r'commit/df904f302a443c64ea4b542e8fd486f58be50a47', patch, re.M)
+    bbappend = (LAYER_SOURCE / BBAPPEND).read_text()
+    assert re.search(r'^SRC_URI \+= "file://%s"$' % re.escape(Path(PATCH).name), bbappend, re.M)
+    assert re.search(r'^FILESEXTRAPATHS:prepend := "\$\{THISDIR\}/files:"$', bbappend, re.M)
+
+
+@pytest.mark.parametrize('recipe, applies', [
+    (META_ROS_FASTRTPS, True),       # PetaLinux 2023.2's meta-ros
+    ('fastrtps_2.6.0-4.bb', False),  # another release of the same sources
+    ('fastrtps_2.6.7-1.bb', False),  # a Fast DDS that has the fix
+    ('fastrtps_2.14.5-1.bb', False),
+    ('fastrtps-cmake-module_2.2.0-2.bb', False),
+])
+def test_the_bbappend_takes_meta_ros_fast_dds_2_6_0_3_alone(recipe, applies):
+    assert model.appends_to(Path(BBAPPEND).name, recipe) is applies
+    assert enable_ros.appends_to(BBAPPEND, recipe) is applies
+
+
+@pytest.mark.parametrize('board', sorted(BOARDS))
+def test_a_project_with_another_copy_of_a_recipe_is_replaced_only_with_replace(tmp_path, board):
+    project = make_project(tmp_path, board, 'enabled')
+    old = (LAYER_SOURCE / RECIPE).read_text().replace('tflite_runtime-2.14.0-', 'x-')
+    (project / META_USER / RECIPE).write_text(old)
+    os.chmod(project / META_USER / RECIPE, 0o600)
+    (project / META_USER / BBAPPEND).unlink()
+    before = project_files(project)
+
+    check = run_tool(project, '--check')
+    assert check.returncode == 1
+    assert 'meta-user: %s: differs from petalinux/meta-user/%s' % (RECIPE, RECIPE) in check.stdout
+    assert 'meta-user: %s: missing' % BBAPPEND in check.stdout
+
+    refused = run_tool(project)
+    assert refused.returncode == 2
+    assert refused.stderr.startswith('error: nothing written: ')
+    assert '--replace' in refused.stderr
+    assert project_files(project) == before  # not even the missing bbappend
+
+    dry = run_tool(project, '--dry-run', '--replace')
+    assert dry.returncode == 0
+    assert '-SRC_URI = "https://files.pythonhosted.org/' in dry.stdout
+    assert '/x-cp310-cp310-manylinux_2_34_aarch64.whl"' in dry.stdout
+    assert 'new file %s' % (META_USER / BBAPPEND) in dry.stdout
+    assert project_files(project) == before
+
+    replaced = run_tool(project, '--replace')
+    assert replaced.returncode == 0, replaced.stderr
+    assert 'meta-user: placed 1 file(s), replaced 1, already 1' in replaced.stdout
+    assert_enabled(project)
+    assert (project / META_USER / RECIPE).stat().st_mode & 0o777 == 0o600  # its mode kept
+    assert run_tool(project).stdout.count('nothing to change') == 1
+    assert run_tool(project, '--check').returncode == 0
+
+
+@pytest.mark.parametrize('board', sorted(BOARDS))
+def test_dry_run_shows_the_layer_files_and_check_lists_them(tmp_path, board):
+    project = make_project(tmp_path, board, 'fresh')
+    before = project_files(project)
+    dry = run_tool(project, '--dry-run')
+    assert dry.returncode == 0
+    for relative in LAYER_FILES:
+        assert 'new file %s (petalinux/meta-user/%s, ' % (META_USER / relative, relative) in (
+            dry.stdout)
+    assert 'layer.conf: BBFILES already picks up the recipes' in dry.stdout
+    assert '+CONFIG_python3-tflite-runtime=y' in dry.stdout
+    assert project_files(project) == before
+    assert not (project / META_USER / 'recipes-ros').exists()
+    check = run_tool(project, '--check')
+    assert check.returncode == 1
+    assert ['meta-user: %s: missing' % relative for relative in LAYER_FILES] == [
+        line.strip() for line in check.stdout.splitlines() if 'meta-user: ' in line]
+
+
+@pytest.mark.parametrize('layer_conf, appended', [
+    # PetaLinux 2023.2's own: nothing to do.
+    (None, False),
+    # The same patterns through :append, and one that also reads deeper folders.
+    ('BBFILES:append = " ${LAYERDIR}/recipes-*/*/*.bb ${LAYERDIR}/recipes-*/*/*.bbappend"\n',
+     False),
+    ('BBFILES += "${LAYERDIR}/recipes-*/*/*.bbappend"\nBBFILES += "${LAYERDIR}/recipes-*/*/*.bb '
+     '${LAYERDIR}/recipes-*/*/*/*.bb"\n', False),
+    # Recipes but no bbappends, only deeper folders, glued onto the earlier layers' last word.
+    ('BBFILES += "${LAYERDIR}/recipes-*/*/*.bb"\n', True),
+    ('BBFILES += "${LAYERDIR}/recipes-*/*/*/*.bb ${LAYERDIR}/recipes-*/*/*/*.bbappend"\n', True),
+    ('BBFILES .= "${LAYERDIR}/recipes-*/*/*.bb ${LAYERDIR}/recipes-*/*/*.bbappend"\n', True),
+    # Commented out.
+    ('#BBFILES += "${LAYERDIR}/recipes-*/*/*.bb ${LAYERDIR}/recipes-*/*/*.bbappend"\n', True),
+])
+def test_layer_conf_gets_a_bbfiles_line_only_when_bitbake_would_miss_the_recipes(
+        tmp_path, layer_conf, appended):
+    project = make_project(tmp_path, 'zub1cg', 'fresh')
+    if layer_conf is not None:
+        (project / LAYER_CONF).write_text('BBPATH .= ":${LAYERDIR}"\n' + layer_conf
+                                          + 'BBFILE_COLLECTIONS += "meta-user"\n')
+    before = (project / LAYER_CONF).read_bytes()
+    shutil.copytree(LAYER_SOURCE, project / META_USER, dirs_exist_ok=True)
+    read = model.bbfiles(before, project / META_USER)
+    assert (str(project / META_USER / RECIPE) in read
+            and str(project / META_USER / BBAPPEND) in read) is not appended
+    result = run_tool(project)
+    assert result.returncode == 0, result.stderr
+    after = (project / LAYER_CONF).read_bytes()
+    if appended:
+        assert after == before + (b'BBFILES += "${LAYERDIR}/recipes-*/*/*.bb '
+                                  b'${LAYERDIR}/recipes-*/*/*.bbappend"\n')
+    else:
+        assert after == before
+    assert_layer_in_place(project)
+    assert 'nothing to change' in run_tool(project).stdout
+
+
+def test_a_layer_conf_that_removes_the_pattern_is_left_to_the_user(tmp_path):
+    project = make_project(tmp_path, 'u96v2', 'fresh')
+    with open(project / LAYER_CONF, 'a') as stream:
+        stream.write('BBFILES:remove = "${LAYERDIR}/recipes-*/*/*.bbappend"\n')
+    before = project_files(project)
+    for extra in ([], ['--check'], ['--dry-run']):
+        result = run_tool(project, *extra)
+        assert result.returncode == 2
+        assert 'leaves out fastrtps_2.6.0-3.bbappend' in result.stderr
+        assert 'edit it by hand' in result.stderr
+    assert project_files(project) == before
+
+
+def test_a_bbmask_that_hides_a_recipe_is_warned_about(tmp_path):
+    project = make_project(tmp_path, 'uz7ev', 'fresh')
+    with open(project / LAYER_CONF, 'a') as stream:
+        stream.write('BBMASK += "meta-user/recipes-ros/"\n')
+    result = run_tool(project)
+    assert result.returncode == 0
+    assert ("warning: %s: BBMASK 'meta-user/recipes-ros/' hides fastrtps_2.6.0-3.bbappend"
+            % LAYER_CONF) in result.stderr
+
+
+def test_another_version_of_a_recipe_in_the_layer_is_warned_about(tmp_path):
+    project = make_project(tmp_path, 'zub1cg', 'enabled')
+    other = project / META_USER / 'recipes-python/python3-tflite-runtime'
+    (other / 'python3-tflite-runtime_2.15.0.bb').write_text('LICENSE = "CLOSED"\n')
+    (project / META_USER / 'recipes-ros/fastrtps/fastrtps_%.bbappend').write_text('\n')
+    result = run_tool(project)
+    assert result.returncode == 0
+    assert 'nothing to change' in result.stdout
+    assert ('python3-tflite-runtime_2.15.0.bb: another version of python3-tflite-runtime, '
+            'which bitbake reads too') in result.stderr
+    assert 'fastrtps_%.bbappend: another bbappend of fastrtps' in result.stderr
+
+
+@pytest.mark.parametrize('recipes, warned', [
+    (['meta-ros2-humble/generated-recipes/fastrtps/fastrtps_2.6.0-3.bb',
+      'meta-ros2-foxy/generated-recipes/fastrtps/fastrtps_2.1.1-1.bb'], False),
+    (['meta-ros2-humble/generated-recipes/fastrtps/fastrtps_2.6.7-1.bb'], True),
+    ([], True),
+])
+def test_a_meta_ros_without_fast_dds_2_6_0_3_is_warned_about(tmp_path, recipes, warned):
+    project = make_project(tmp_path, 'u96v2', 'fresh')
+    layers = project / 'components/yocto/layers/meta-ros'
+    layers.mkdir(parents=True)
+    for recipe in recipes:
+        (layers / recipe).parent.mkdir(parents=True, exist_ok=True)
+        (layers / recipe).write_text('\n')
+    result = run_tool(project, '--check')
+    message = ('warning: %s: no recipe in components/yocto/layers takes it'
+               % (META_USER / BBAPPEND))
+    assert (message in result.stderr) is warned, result.stderr
+    if warned:
+        assert 'BB_DANGLINGAPPENDS_WARNONLY' in result.stderr
+        assert 'fastrtps_2.6.7-1.bb' in result.stderr or 'recipes there: none' in result.stderr
+
+
+def test_new_layer_files_get_the_umask_mode(tmp_path):
+    project = make_project(tmp_path, 'zub1cg', 'fresh')
+    assert run_tool(project, umask=0o027).returncode == 0
+    for relative in LAYER_FILES:
+        assert (project / META_USER / relative).stat().st_mode & 0o777 == 0o640
+    assert (project / META_USER / 'recipes-ros').stat().st_mode & 0o777 == 0o750
+    assert not list(project.rglob('*.enable_ros.tmp'))
+
+
+def test_a_directory_where_a_layer_file_goes_is_a_clear_error(tmp_path):
+    project = make_project(tmp_path, 'zub1cg', 'fresh')
+    (project / META_USER / BBAPPEND).mkdir(parents=True)
+    before = project_files(project)
+    result = run_tool(project)
+    assert result.returncode == 2
+    assert result.stderr.startswith('error: meta-user file is a directory')
+    assert project_files(project) == before
