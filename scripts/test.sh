@@ -226,11 +226,18 @@ board_run() {
 print("[test] Python", sys.version.split()[0], "numpy", numpy.__version__, "OpenCV",
       cv2.__version__, "ROS 2", __import__("os").environ["ROS_DISTRO"], "from",
       rclpy.__file__.split("/lib/python")[0])'
+    # This run is the image: what an image built with petalinux/ has imports here at its
+    # versions, and what no board has (onnxruntime, ai_edge_litert) does not
+    # (petalinux/image_python.txt). Otherwise no test runs.
+    python petalinux/check_board_env.py \
+      || { echo '[test] FAILED: the board-version run is not the image (see above)' >&2; exit 1; }
     # PY_VISION_VIVID=off: the vivid VM's tests are the main run's (docs/vivid.md says why);
     # PY_VISION_LINTERS=off: so are the linters, whose answer is the same on every version.
-    PY_VISION_BROWSER=off PY_VISION_VIVID=off PY_VISION_LINTERS=off workspace_test \
-      "$root/.venv-board/bin/colcon" 'board-version run' --ignore=test/browser "${report[@]}" \
-      "$@"
+    # PY_VISION_BOARD_RUN=1: a test that has a fallback for what the image has (vision_msgs)
+    # takes the image's path, never the fallback.
+    PY_VISION_BROWSER=off PY_VISION_VIVID=off PY_VISION_LINTERS=off PY_VISION_BOARD_RUN=1 \
+      workspace_test "$root/.venv-board/bin/colcon" 'board-version run' --ignore=test/browser \
+      "${report[@]}" "$@"
   ) || status=$?
   check_ran_tests "$status" 'board-version run' "$@"
 }
