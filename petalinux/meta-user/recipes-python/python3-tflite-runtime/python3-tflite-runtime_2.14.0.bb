@@ -64,7 +64,7 @@ python () {
 }
 
 # Shipped byte for byte as the wheel has it: its extension module keeps its symbol table
-# (about 1 MB of its 6.2 MB), and the files on the board are the ones the wheel's RECORD
+# (about 1 MB of its 6.5 MB), and the files on the board are the ones the wheel's RECORD
 # lists and the ones tested elsewhere from the same wheel.
 INHIBIT_PACKAGE_STRIP = "1"
 INHIBIT_PACKAGE_DEBUG_SPLIT = "1"
