@@ -15,24 +15,28 @@
 # The cache is $PY_VISION_AARCH64_CACHE, else ${XDG_CACHE_HOME:-~/.cache}/py_vision/aarch64.
 # Where something cannot be set up it says so in one line (also in the cache's problem.txt,
 # which the test shows) and exits 0: the test is then skipped with the reason, and fails in CI.
-# Safe to run again: it only does what is missing.
+# Run again, it does nothing while the cache is complete for the pins below.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cache=${PY_VISION_AARCH64_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/py_vision/aarch64}
-log=/tmp/py_vision-aarch64.log
+log=$cache/setup.log
 python=${PYTHON:-$root/.venv/bin/python}
 [ -x "$python" ] || python=python3
 
-# The wheels by file name, with their sha256 (PyPI's). The first is the image's
-# (petalinux/meta-user/recipes-python/python3-tflite-runtime/, SRC_URI and SRC_URI[sha256sum]).
+# The wheels: each file's name, and on the next line its sha256 (PyPI's). The first is the
+# image's (petalinux/meta-user/recipes-python/python3-tflite-runtime/: SRC_URI and
+# SRC_URI[sha256sum]).
 image_wheel=tflite_runtime-2.14.0-cp310-cp310-manylinux_2_34_aarch64.whl
-wheels="
-$image_wheel d38c6885f5e9673c11a61ccec5cad7c032ab97340718d26b17794137f398b780
-tflite_runtime-2.14.0-cp311-cp311-manylinux_2_34_aarch64.whl ce9fa5d770a9725c746dcbf6f59f3178233b3759f09982e8b2db8d2234c333b0
-numpy-1.23.3-cp311-cp311-manylinux_2_17_aarch64.manylinux2014_aarch64.whl bdc9febce3e68b697d931941b263c59e0c74e8f18861f4064c1f712562903411
-tflite_runtime-2.14.0-cp311-cp311-manylinux2014_x86_64.whl 195ab752e7e57329a68e54dd3dd5439fad888b9bff1be0f0dc042a3237a90e4d
-numpy-1.23.3-cp311-cp311-manylinux_2_17_x86_64.manylinux2014_x86_64.whl 301c00cf5e60e08e04d842fc47df641d4a181e651c7135c50dc2762ffe293dbd
-"
+wheels="$image_wheel
+  d38c6885f5e9673c11a61ccec5cad7c032ab97340718d26b17794137f398b780
+tflite_runtime-2.14.0-cp311-cp311-manylinux_2_34_aarch64.whl
+  ce9fa5d770a9725c746dcbf6f59f3178233b3759f09982e8b2db8d2234c333b0
+numpy-1.23.3-cp311-cp311-manylinux_2_17_aarch64.manylinux2014_aarch64.whl
+  bdc9febce3e68b697d931941b263c59e0c74e8f18861f4064c1f712562903411
+tflite_runtime-2.14.0-cp311-cp311-manylinux2014_x86_64.whl
+  195ab752e7e57329a68e54dd3dd5439fad888b9bff1be0f0dc042a3237a90e4d
+numpy-1.23.3-cp311-cp311-manylinux_2_17_x86_64.manylinux2014_x86_64.whl
+  301c00cf5e60e08e04d842fc47df641d4a181e651c7135c50dc2762ffe293dbd"
 # Debian 12's arm64 packages an aarch64 Python 3.11 needs to run numpy and tflite_runtime
 # (whose library needs libstdc++): the same glibc, 2.36, as PetaLinux 2023.2's.
 suite=bookworm
@@ -43,11 +47,25 @@ stamp=$(printf '%s\n' "$wheels" "$suite" "$packages" | sha256sum | cut -c1-16)
 problem() {
   mkdir -p "$cache"
   echo "$*" >"$cache/problem.txt"
+  rm -f "$cache/.complete"
   echo "[aarch64] $*: the aarch64 model test will be skipped (in CI: fail)"
   exit 0
 }
 
 have() { command -v "$1" >/dev/null 2>&1; }
+
+# The recipe's wheel must be the one pinned here: the test then runs that build.
+recipe=$(ls "$root"/petalinux/meta-user/recipes-python/python3-tflite-runtime/*.bb 2>/dev/null \
+  | head -1 || true)
+if [ -n "$recipe" ]; then
+  url=$(sed -n 's/^SRC_URI *= *"\([^"; ]*\).*/\1/p' "$recipe" | head -1)
+  sum=$(sed -n 's/^SRC_URI\[sha256sum\] *= *"\([0-9a-f]*\)".*/\1/p' "$recipe" | head -1)
+  pinned=$(sed -n 2p <<<"$wheels" | tr -d ' ')
+  if [ "${url##*/}" != "$image_wheel" ] || [ "$sum" != "$pinned" ]; then
+    problem "the recipe ${recipe#"$root"/} installs ${url##*/} (sha256 $sum), this script" \
+      "pins $image_wheel (sha256 $pinned): make them the same"
+  fi
+fi
 
 if [ -f "$cache/.complete" ] && [ "$(cat "$cache/.complete")" = "$stamp" ]; then
   echo "[aarch64] ready: $cache"
@@ -62,19 +80,6 @@ done
 mkdir -p "$cache/wheels"
 rm -f "$cache/.complete" "$cache/problem.txt"
 : >"$log"
-
-# The recipe's wheel must be the one pinned here: the test then runs that build.
-recipe=$(ls "$root"/petalinux/meta-user/recipes-python/python3-tflite-runtime/*.bb 2>/dev/null \
-  | head -1 || true)
-if [ -n "$recipe" ]; then
-  url=$(sed -n 's/^SRC_URI *= *"\([^";]*\).*/\1/p' "$recipe" | head -1)
-  sum=$(sed -n 's/^SRC_URI\[sha256sum\] *= *"\([0-9a-f]*\)".*/\1/p' "$recipe" | head -1)
-  pinned=$(awk -v name="$image_wheel" '$1 == name {print $2}' <<<"$wheels")
-  if [ "${url##*/}" != "$image_wheel" ] || [ "$sum" != "$pinned" ]; then
-    problem "the recipe ${recipe#"$root"/} installs ${url##*/} (sha256 $sum), this script" \
-      "pins $image_wheel (sha256 $pinned): make them the same"
-  fi
-fi
 
 # The wheels, each checked against its sha256.
 download_wheels() {
@@ -92,8 +97,7 @@ download_wheels aarch64 3.10 tflite-runtime==2.14.0 \
   && download_wheels aarch64 3.11 tflite-runtime==2.14.0 numpy==1.23.3 \
   && download_wheels x86_64 3.11 tflite-runtime==2.14.0 numpy==1.23.3 \
   || problem "pip could not download the wheels (see $log)"
-while read -r name sum; do
-  [ -n "$name" ] || continue
+while read -r name && read -r sum; do
   [ -f "$cache/wheels/$name" ] || problem "pip did not download $name (see $log)"
   [ "$(sha256sum <"$cache/wheels/$name" | cut -d' ' -f1)" = "$sum" ] \
     || { rm -f "$cache/wheels/$name"; problem "$name does not have the sha256 pinned here"; }
@@ -109,15 +113,16 @@ targets=$(apt-get indextargets --format '$(TARGET_OF) $(REPO_URI) $(RELEASE) $(C
   2>/dev/null | sort -u)
 archive=$(awk -v r="$codename" '$1 == "deb" && $3 == r && $4 == "main" {print $2; exit}' \
   <<<"$targets")
-security=$(awk -v r="$codename-security" '$1 == "deb" && $3 == r && $4 == "main" {print $2; exit}' \
-  <<<"$targets")
+security=$(awk -v r="$codename-security" \
+  '$1 == "deb" && $3 == r && $4 == "main" {print $2; exit}' <<<"$targets")
 [ -n "$archive" ] || problem "apt has no Debian archive for $codename here"
 keyring=/usr/share/keyrings/debian-archive-keyring.gpg
 [ -f "$keyring" ] || problem "no $keyring (Debian package debian-archive-keyring)"
+options="[arch=arm64,amd64 signed-by=$keyring]"
 {
-  echo "deb [arch=arm64,amd64 signed-by=$keyring] $archive $suite main"
-  echo "deb [arch=arm64,amd64 signed-by=$keyring] $archive $suite-updates main"
-  [ -z "$security" ] || echo "deb [arch=arm64,amd64 signed-by=$keyring] $security $suite-security main"
+  echo "deb $options $archive $suite main"
+  echo "deb $options $archive $suite-updates main"
+  [ -z "$security" ] || echo "deb $options $security $suite-security main"
 } >"$state/sources.list"
 apt=(-o Dir::Etc::SourceList="$state/sources.list" -o Dir::Etc::SourceParts="$state/parts"
   -o Dir::Etc::Preferences="$state/prefs/none" -o Dir::Etc::PreferencesParts="$state/prefs"

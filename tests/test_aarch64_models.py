@@ -331,7 +331,7 @@ def _recipe():
     if not recipes:
         return None
     text = recipes[0].read_text()
-    url = re.search(r'^SRC_URI\s*=\s*"([^";]+)', text, re.M)
+    url = re.search(r'^SRC_URI\s*=\s*"([^";\s]+)', text, re.M)
     digest = re.search(r'^SRC_URI\[sha256sum\]\s*=\s*"([0-9a-f]{64})"', text, re.M)
     assert url and digest, '%s: no one-line SRC_URI and SRC_URI[sha256sum]' % recipes[0]
     return url.group(1).rsplit('/', 1)[-1], digest.group(1)
