@@ -127,6 +127,12 @@ install_compiler
 # are then skipped, and fail in CI).
 bash "$root/scripts/vivid_vm.sh"
 
+# The boards' TensorFlow Lite runtime, tflite_runtime's aarch64 build, run under QEMU's user-mode
+# emulator on the shipped models (tests/test_aarch64_models.py): scripts/aarch64_root.sh
+# downloads an aarch64 Python from Debian's packages, QEMU and the wheels into a cache, and
+# installs nothing (one line where it cannot; that test is then skipped, and fails in CI).
+bash "$root/scripts/aarch64_root.sh"
+
 # pytest exits 5 when it ran no test: that is a failure, except that a -k or -m that matches
 # none of a run's tests may leave that run empty.
 check_ran_tests() {
