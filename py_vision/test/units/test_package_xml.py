@@ -19,8 +19,9 @@ Every module imported anywhere in the package (py_vision/ and its subpackages, l
 inside functions and in try blocks (optional imports: vision_msgs), also by name through
 importlib, is one of: the standard library; a ROS package (one whose share/<name>/package.xml
 is in this environment's ament index, or one known to be a ROS package where it is not
-installed), declared under its own name; a Python module with a rosdep key (ROSDEP_KEY), declared under that key; or one
-of the optional model runtimes that rosdep has no key for (PIP_ONLY), which their error names.
+installed), declared under its own name; a Python module with a rosdep key (ROSDEP_KEY),
+declared under that key; or one of the optional model runtimes that rosdep has no key for
+(PIP_ONLY), which load() names when none is installed.
 """
 
 import ast
