@@ -28,8 +28,8 @@ its name in the file) and checks the arrays it is given against its inputs befor
 Model is not thread-safe: one thread runs it.
 
 Quantised models: an input or output with a scale (int8, uint8: `TensorInfo.scale` and
-`zero_point`) is fed and read in float, here, whatever the runtime: `run()` quantises float
-values for such an input (`quantize`: round(x / scale) + zero point, to the nearest, half to
+`zero_point`) is fed and read in float, here, whatever the runtime: `run()` (`RuntimeModel`, which
+every runtime's model shares) quantises float values for such an input (`quantize`: round(x / scale) + zero point, to the nearest, half to
 even, clipped to the type's range; values already of the input's own type go in as they are)
 and returns such an output dequantised to float32 (`dequantize`: (q - zero point) * scale). So
 the steps' pre- and post-processing is the same for a float and a quantised model. A .tflite
@@ -53,8 +53,7 @@ import sys
 from typing import Callable, Dict, List, Optional, Protocol, Sequence, Tuple
 
 import numpy as np
-from py_vision.models.onnx_graph import OnnxFormatError, read_signature
-from py_vision.models.onnx_graph import without_edge_quantization
+from py_vision.models.onnx_graph import OnnxFormatError, read_signature, without_edge_quantization
 
 __all__ = ['dequantize', 'find_outputs', 'load', 'Model', 'ModelError', 'quantize', 'RUNTIMES',
            'RuntimeMissing', 'TensorInfo']
@@ -200,7 +199,7 @@ def _shape_text(shape: Tuple[int, ...]) -> str:
     return '(%s)' % ', '.join('?' if size < 0 else str(size) for size in shape)
 
 
-class _Runtime:
+class RuntimeModel:
     """
     What every runtime shares: run() checks and quantises the inputs, dequantises the outputs.
 
@@ -224,7 +223,7 @@ class _Runtime:
         raise NotImplementedError
 
 
-class _TfliteModel(_Runtime):
+class _TfliteModel(RuntimeModel):
     """A .tflite model in LiteRT's or tflite_runtime's interpreter (the same Python API)."""
 
     def __init__(self, path: str, threads: int, interpreter_module, runtime: str):
@@ -279,7 +278,7 @@ def _signature(path: str) -> Tuple[Tuple[TensorInfo, ...], Tuple[TensorInfo, ...
             tuple(TensorInfo(*item) for item in outputs), data)
 
 
-class _OnnxruntimeModel(_Runtime):
+class _OnnxruntimeModel(RuntimeModel):
     """An .onnx model in an onnxruntime session on the CPU."""
 
     def __init__(self, path: str, threads: int, onnxruntime):
@@ -302,7 +301,7 @@ class _OnnxruntimeModel(_Runtime):
         return list(self._session.run([info.name for info in self.outputs], feed))
 
 
-class _OpencvModel(_Runtime):
+class _OpencvModel(RuntimeModel):
     """
     An .onnx model in OpenCV's DNN module.
 
