@@ -132,32 +132,28 @@ def _value_info(data: bytes) -> Tuple[str, Tuple[int, ...], np.dtype]:
 
 def _scalar(data: bytes) -> Optional[float]:
     """Return the one number a TensorProto holds, or None when it holds another count."""
-    dims, element, raw, numbers = [], 0, None, []
+    dims, element, stored = [], 0, []
     for number, wire, value in _fields(data):
         if number == 1 and wire == 0:
             dims.append(value)
         elif number == 2 and wire == 0:
             element = value
-        elif number == 9 and wire == 2:
-            raw = value
-        elif number == 4 and wire == 5:  # float_data, one by one
-            numbers.append(float(np.frombuffer(value, '<f4')[0]))
-        elif number == 4 and wire == 2:  # float_data, packed
-            numbers.extend(float(item) for item in np.frombuffer(value, '<f4'))
-        elif number in (5, 7) and wire == 0:  # int32_data, int64_data
-            numbers.append(_signed(value))
-        elif number in (5, 7) and wire == 2:
-            pos = 0
-            while pos < len(value):
-                item, pos = _varint(value, pos)
-                numbers.append(_signed(item))
-    if any(size != 1 for size in dims) or element not in ELEMENT_TYPES:
-        return None
-    if raw is not None:
+        elif number in (4, 5, 7, 9):  # float_data, int32_data, int64_data, raw_data
+            stored.append((number, wire, value))
+    if any(size != 1 for size in dims) or element not in ELEMENT_TYPES or len(stored) != 1:
+        return None  # a weight, not a scale or a zero point: not decoded
+    number, wire, value = stored[0]
+    if number == 9 and wire == 2:
         dtype = ELEMENT_TYPES[element].newbyteorder('<')
-        numbers = [item.item() for item in np.frombuffer(raw, dtype)] if (
-            len(raw) == dtype.itemsize) else []
-    return numbers[0] if len(numbers) == 1 else None
+        return np.frombuffer(value, dtype)[0].item() if len(value) == dtype.itemsize else None
+    if number == 4 and wire in (2, 5):  # one float, packed or not
+        return float(np.frombuffer(value, '<f4')[0]) if len(value) == 4 else None
+    if number in (5, 7) and wire == 0:
+        return _signed(value)
+    if number in (5, 7) and wire == 2:  # packed varints
+        item, end = _varint(value, 0)
+        return _signed(item) if end == len(value) else None
+    return None
 
 
 class _Graph:

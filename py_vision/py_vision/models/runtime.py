@@ -28,13 +28,14 @@ its name in the file) and checks the arrays it is given against its inputs befor
 Model is not thread-safe: one thread runs it.
 
 Quantised models: an input or output with a scale (int8, uint8: `TensorInfo.scale` and
-`zero_point`) is fed and read in float, here, whatever the runtime: `run()` (`RuntimeModel`, which
-every runtime's model shares) quantises float values for such an input (`quantize`: round(x / scale) + zero point, to the nearest, half to
-even, clipped to the type's range; values already of the input's own type go in as they are)
-and returns such an output dequantised to float32 (`dequantize`: (q - zero point) * scale). So
-the steps' pre- and post-processing is the same for a float and a quantised model. A .tflite
-file's scale and zero point are its tensors' (per-tensor; a per-channel quantised input or
-output is refused); an .onnx file's are read by onnx_graph (its QDQ convention).
+`zero_point`) is fed and read in float, here, whatever the runtime: `run()` (`RuntimeModel`,
+which every runtime's model shares) quantises float values for such an input (`quantize`:
+round(x / scale) + zero point, to the nearest, half to even, clipped to the type's range;
+values already of the input's own type go in as they are) and returns such an output
+dequantised to float32 (`dequantize`: (q - zero point) * scale). So the steps' pre- and
+post-processing is the same for a float and a quantised model. A .tflite file's scale and zero
+point are its tensors' (per tensor; an input or output quantised per channel is refused); an
+.onnx file's are read by onnx_graph (its QDQ convention).
 
 `find_outputs` checks that a model is the one a step expects and finds the outputs it reads by
 their names, in whatever order the file lists them (by position where the names are unknown).
