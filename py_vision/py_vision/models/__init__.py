@@ -17,8 +17,10 @@
 Models on camera frames, without ROS: the runtimes and MediaPipe's hand and face models.
 
 - `runtime`: `load(path)` a .tflite or .onnx model into whichever runtime is installed
-  (`Model`, `ModelError`, `RuntimeMissing`);
-- `onnx_graph`: an ONNX file's inputs and outputs, read without the onnx package;
+  (`Model`, `ModelError`, `RuntimeMissing`), quantised ones fed and read in float;
+  `find_outputs`, a model's outputs by name;
+- `onnx_graph`: an ONNX file's inputs and outputs (and their quantisation), read without the
+  onnx package;
 - `files`: `shipped_model(name)`, the model files installed with the package;
 - `anchors`: SSD anchors, decoding of boxes and keypoints, non-maximum suppression (shared by
   the palm and the face detector);

@@ -197,17 +197,20 @@ def weighted_nms(detections: Detections, threshold: float = 0.3,
 
 def detect_in_frame(model: Model, image_bgr: np.ndarray, value_range: Tuple[float, float],
                     anchors: np.ndarray, decoding: DecodeOptions, nms_threshold: float,
-                    limit: int) -> List[Tuple[np.ndarray, float, np.ndarray]]:
+                    limit: int, outputs: Tuple[int, int] = (0, 1)
+                    ) -> List[Tuple[np.ndarray, float, np.ndarray]]:
     """
     Run a square SSD detector on a whole bgr8 frame: (box, score, keypoints), best first.
 
     The frame is letterboxed into the model's input (decoding's x_scale pixels a side, values
-    in value_range); box is (x, y, w, h) and keypoints (num_keypoints, 2), in frame pixels,
-    float32; at most `limit` detections (0: all).
+    in value_range); `outputs` says which of the model's outputs are the regressors and the
+    scores (runtime.find_outputs); box is (x, y, w, h) and keypoints (num_keypoints, 2), in
+    frame pixels, float32; at most `limit` detections (0: all).
     """
     size = decoding.x_scale
     crop = letterbox(image_bgr, int(size), int(size), value_range)
-    regressors, scores = model.run(crop.tensor)
+    results = model.run(crop.tensor)
+    regressors, scores = results[outputs[0]], results[outputs[1]]
     found = weighted_nms(decode(regressors, scores, anchors, decoding), nms_threshold, limit)
     detections = []
     for box, keypoints, score in zip(found.boxes, found.keypoints, found.scores):

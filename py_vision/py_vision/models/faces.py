@@ -31,7 +31,7 @@ from typing import List
 import numpy as np
 from py_vision.models.anchors import AnchorOptions, DecodeOptions, detect_in_frame, ssd_anchors
 from py_vision.models.files import shipped_model
-from py_vision.models.runtime import check_shapes, load, Model
+from py_vision.models.runtime import find_outputs, load, Model
 
 __all__ = ['Face', 'FaceDetector', 'FACE_KEYPOINTS']
 
@@ -42,6 +42,9 @@ FACE_KEYPOINTS = ('right_eye', 'left_eye', 'nose_tip', 'mouth_centre', 'right_ea
 
 MODEL_FILE = 'face_detection_short_range.tflite'
 _SIZE = 128
+# The outputs read, by their names in face_detection_short_range.tflite (else the first two):
+# the regressors (box and keypoints per anchor) and the scores.
+_OUTPUTS = ((('regressors',), (1, 896, 16)), (('classificators',), (1, 896, 1)))
 
 
 @dataclass
@@ -59,7 +62,7 @@ class FaceDetector:
     def __init__(self, model: Model, min_score: float = 0.5, nms_threshold: float = 0.3,
                  max_faces: int = 0):
         """Use a loaded face_detection_short_range model; max_faces 0 means no limit."""
-        check_shapes(model, [(1, _SIZE, _SIZE, 3)], ((1, 896, 16), (1, 896, 1)))
+        self._outputs = find_outputs(model, [(1, _SIZE, _SIZE, 3)], _OUTPUTS)
         self.model = model
         self.min_score = min_score
         self.nms_threshold = nms_threshold
@@ -76,4 +79,4 @@ class FaceDetector:
         """Return the faces in the frame, best score first."""
         return [Face(box, score, keypoints) for box, score, keypoints in detect_in_frame(
             self.model, image_bgr, (-1.0, 1.0), self._anchors, self._decoding,
-            self.nms_threshold, self.max_faces)]
+            self.nms_threshold, self.max_faces, self._outputs)]

@@ -46,7 +46,7 @@ from py_vision.models.crops import rotated_crop
 from py_vision.models.files import shipped_model
 from py_vision.models.palm import enlarge, hand_region, HandRegion, MODEL_FILE as PALM_FILE
 from py_vision.models.palm import PalmDetector, upright_rotation
-from py_vision.models.runtime import check_shapes, load, Model
+from py_vision.models.runtime import find_outputs, load, Model
 
 __all__ = ['Hand', 'HAND_LANDMARKS', 'HandTracker', 'LANDMARK_FILE', 'landmark_region']
 
@@ -63,6 +63,11 @@ HAND_LANDMARKS = (
 )
 
 _SIZE = 224
+# The outputs read, by their names in hand_landmark_lite.tflite (another export of the model
+# may list them in another order; where these names are not all there, the first three are
+# read): the 21 landmarks (x, y in the 224-pixel input, z), the hand presence score and the
+# left-hand score. Presence and handedness have the same shape: only the names tell them apart.
+_OUTPUTS = ((('Identity',), (1, 63)), (('Identity_1',), (1, 1)), (('Identity_2',), (1, 1)))
 # The landmarks that outline the palm (wrist, thumb base, each finger's first two joints), and
 # the knuckles whose mean with the middle one gives the hand's direction.
 _PALM = [0, 1, 2, 3, 5, 6, 9, 10, 13, 14, 17, 18]
@@ -132,7 +137,7 @@ class HandTracker:
                  min_hand_score: float = 0.5, max_hands: int = 2, mirrored: bool = False,
                  track: bool = True):
         """Use a loaded palm_detection_lite and hand_landmark_lite model."""
-        check_shapes(landmark_model, [(1, _SIZE, _SIZE, 3)], ((1, 63), (1, 1), (1, 1)))
+        self._outputs = find_outputs(landmark_model, [(1, _SIZE, _SIZE, 3)], _OUTPUTS)
         self.palms = PalmDetector(palm_model, min_palm_score, max_palms=max_hands)
         self.landmark_model = landmark_model
         self.min_hand_score = min_hand_score
@@ -180,7 +185,8 @@ class HandTracker:
         """Return the hand in the region, or None when the model sees none there."""
         crop = rotated_crop(image_bgr, (region.x, region.y), region.side, region.rotation,
                             _SIZE, (0.0, 1.0))
-        points, presence, left = self.landmark_model.run(crop.tensor)[:3]
+        results = self.landmark_model.run(crop.tensor)
+        points, presence, left = (results[index] for index in self._outputs)
         score = float(presence.reshape(-1)[0])
         if score < self.min_hand_score:
             return None

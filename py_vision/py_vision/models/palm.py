@@ -32,13 +32,16 @@ from typing import List
 
 import numpy as np
 from py_vision.models.anchors import AnchorOptions, DecodeOptions, detect_in_frame, ssd_anchors
-from py_vision.models.runtime import check_shapes, Model
+from py_vision.models.runtime import find_outputs, Model
 
 __all__ = ['enlarge', 'hand_region', 'HandRegion', 'Palm', 'PalmDetector', 'upright_rotation']
 
 MODEL_FILE = 'palm_detection_lite.tflite'
 _SIZE = 192
 _WRIST, _MIDDLE_KNUCKLE = 0, 2
+# The outputs read, by their names in palm_detection_lite.tflite (else the first two): the
+# regressors (box and keypoints per anchor) and the scores.
+_OUTPUTS = ((('Identity',), (1, 2016, 18)), (('Identity_1',), (1, 2016, 1)))
 
 
 @dataclass
@@ -66,7 +69,7 @@ class PalmDetector:
     def __init__(self, model: Model, min_score: float = 0.5, nms_threshold: float = 0.3,
                  max_palms: int = 0):
         """Use a loaded palm_detection_lite model; max_palms 0 means no limit."""
-        check_shapes(model, [(1, _SIZE, _SIZE, 3)], ((1, 2016, 18), (1, 2016, 1)))
+        self._outputs = find_outputs(model, [(1, _SIZE, _SIZE, 3)], _OUTPUTS)
         self.model = model
         self.nms_threshold = nms_threshold
         self.max_palms = max_palms
@@ -77,7 +80,7 @@ class PalmDetector:
         """Return the palms in the frame, best score first."""
         return [Palm(box, score, keypoints) for box, score, keypoints in detect_in_frame(
             self.model, image_bgr, (0.0, 1.0), self._anchors, self._decoding,
-            self.nms_threshold, self.max_palms)]
+            self.nms_threshold, self.max_palms, self._outputs)]
 
 
 def upright_rotation(start: np.ndarray, end: np.ndarray) -> float:

@@ -23,8 +23,22 @@ OpenCV's DNN module (the boards' OpenCV 4.6 has it). Every runtime is optional: 
 is a `RuntimeMissing` naming the package to install. A file that is missing, empty, truncated
 or not a model is a `ModelError` whose one-line message names the file and what is wrong.
 
-The loaded `Model` says what it is (`runtime`, `inputs`, `outputs`) and checks the arrays it is
-given against its inputs before running. A Model is not thread-safe: one thread runs it.
+The loaded `Model` says what it is (`runtime`, `inputs`, `outputs`: each a `TensorInfo`, with
+its name in the file) and checks the arrays it is given against its inputs before running. A
+Model is not thread-safe: one thread runs it.
+
+Quantised models: an input or output with a scale (int8, uint8: `TensorInfo.scale` and
+`zero_point`) is fed and read in float, here, whatever the runtime: `run()` (`RuntimeModel`,
+which every runtime's model shares) quantises float values for such an input (`quantize`:
+round(x / scale) + zero point, to the nearest, half to even, clipped to the type's range;
+values already of the input's own type go in as they are) and returns such an output
+dequantised to float32 (`dequantize`: (q - zero point) * scale). So the steps' pre- and
+post-processing is the same for a float and a quantised model. A .tflite file's scale and zero
+point are its tensors' (per tensor; an input or output quantised per channel is refused); an
+.onnx file's are read by onnx_graph (its QDQ convention).
+
+`find_outputs` checks that a model is the one a step expects and finds the outputs it reads by
+their names, in whatever order the file lists them (by position where the names are unknown).
 
 `threads` above 1 pays only on cores nothing else needs: on this project's 2-core test machine
 at a load of about 10, tflite_runtime 2.14 ran the palm model in 169 ms (p50) with 2 threads
@@ -40,10 +54,10 @@ import sys
 from typing import Callable, Dict, List, Optional, Protocol, Sequence, Tuple
 
 import numpy as np
-from py_vision.models.onnx_graph import OnnxFormatError, read_signature
+from py_vision.models.onnx_graph import OnnxFormatError, read_signature, without_edge_quantization
 
-__all__ = ['check_shapes', 'load', 'Model', 'ModelError', 'RUNTIMES', 'RuntimeMissing',
-           'TensorInfo']
+__all__ = ['dequantize', 'find_outputs', 'load', 'Model', 'ModelError', 'quantize', 'RUNTIMES',
+           'RuntimeMissing', 'TensorInfo']
 
 
 class ModelError(Exception):
@@ -56,11 +70,18 @@ class RuntimeMissing(ModelError):
 
 @dataclass(frozen=True)
 class TensorInfo:
-    """One input or output of a model: its name, shape (-1 where open) and element type."""
+    """
+    One input or output of a model, as its file says.
+
+    name; shape (-1 where open); dtype, the element type in the model; scale and zero_point of
+    a quantised tensor (value = (q - zero_point) * scale), None and 0 where it is not one.
+    """
 
     name: str
     shape: Tuple[int, ...]
     dtype: np.dtype
+    scale: Optional[float] = None
+    zero_point: int = 0
 
 
 class Model(Protocol):
@@ -73,7 +94,26 @@ class Model(Protocol):
     outputs: Tuple[TensorInfo, ...]
 
     def run(self, *arrays: np.ndarray) -> List[np.ndarray]:
-        """Run on one array per input (checked); return one array per output, in order."""
+        """
+        Run on one array per input (checked); return one array per output, in order.
+
+        A quantised input takes float values (quantised with its scale and zero point) or
+        values of its own type (as they are); a quantised output comes back dequantised, as
+        float32.
+        """
+
+
+def quantize(values: np.ndarray, info: TensorInfo) -> np.ndarray:
+    """Return float values as a quantised tensor's integers: round(x / scale) + zero point."""
+    limits = np.iinfo(info.dtype)
+    steps = np.round(np.asarray(values, np.float32) / np.float32(info.scale))
+    return np.clip(steps + info.zero_point, limits.min, limits.max).astype(info.dtype)
+
+
+def dequantize(values: np.ndarray, info: TensorInfo) -> np.ndarray:
+    """Return a quantised tensor's integers as the float32 values they stand for."""
+    return ((np.asarray(values).astype(np.int32) - info.zero_point)
+            * np.float32(info.scale)).astype(np.float32)
 
 
 # The runtimes by the extension they load, in the order 'auto' tries them.
@@ -118,30 +158,73 @@ def _check_arrays(model: 'Model', arrays: Sequence[np.ndarray]) -> List[np.ndarr
             raise ModelError("%s: input %d '%s' wants shape %s, got %s"
                              % (name, number, info.name, _shape_text(info.shape), shape))
         if array.dtype != info.dtype:
-            if not np.can_cast(array.dtype, info.dtype, 'same_kind'):
+            if info.scale is not None and array.dtype.kind in 'biuf':
+                array = quantize(array, info)
+            elif not np.can_cast(array.dtype, info.dtype, 'same_kind'):
                 raise ModelError("%s: input %d '%s' wants %s values, got %s"
                                  % (name, number, info.name, info.dtype, array.dtype))
-            array = array.astype(info.dtype)
+            else:
+                array = array.astype(info.dtype)
         checked.append(np.ascontiguousarray(array))
     return checked
 
 
-def check_shapes(model: Model, inputs: Sequence[Tuple[int, ...]],
-                 outputs: Sequence[Tuple[int, ...]]) -> None:
-    """Raise ModelError unless the model has these input shapes and (at least) these outputs."""
+def find_outputs(model: Model, inputs: Sequence[Tuple[int, ...]],
+                 outputs: Sequence[Tuple[Sequence[str], Tuple[int, ...]]]) -> Tuple[int, ...]:
+    """
+    Check that the model is the one expected; return where each wanted output is in its outputs.
+
+    inputs: the input shapes; outputs: (names, shape) of each output to be read, names being
+    what it is called in the files known. By name where each wanted output has one of its
+    names among the model's outputs (a model exported again may list them in another order);
+    else, as for a file whose names are unknown, by position: the first len(outputs). Raises
+    ModelError unless the inputs and the outputs found have these shapes.
+    """
     got_in = tuple(tuple(info.shape) for info in model.inputs)
     got_out = tuple(tuple(info.shape) for info in model.outputs)
-    want_in, want_out = tuple(map(tuple, inputs)), tuple(map(tuple, outputs))
-    if got_in != want_in or got_out[:len(want_out)] != want_out:
+    want_in = tuple(map(tuple, inputs))
+    want_out = tuple(tuple(shape) for _, shape in outputs)
+    where = {info.name: index for index, info in enumerate(model.outputs)}
+    by_name = [next((where[name] for name in names if name in where), None)
+               for names, _ in outputs]
+    if None in by_name or len(set(by_name)) != len(by_name):
+        by_name = list(range(min(len(outputs), len(got_out))))
+    found = tuple(got_out[index] for index in by_name)
+    if got_in != want_in or found != want_out:
         raise ModelError('%s: not the model expected here: its inputs are %s and outputs %s, '
                          'expected %s and %s' % (model.path, got_in, got_out, want_in, want_out))
+    return tuple(by_name)
 
 
 def _shape_text(shape: Tuple[int, ...]) -> str:
     return '(%s)' % ', '.join('?' if size < 0 else str(size) for size in shape)
 
 
-class _TfliteModel:
+class RuntimeModel:
+    """
+    What every runtime shares: run() checks and quantises the inputs, dequantises the outputs.
+
+    A runtime sets path, runtime, threads, inputs and outputs, and implements `_invoke`: run
+    once on one array per input, each of that input's shape and own type, and return the
+    outputs as the model gives them, in order.
+    """
+
+    path: str
+    runtime: str
+    threads: int
+    inputs: Tuple[TensorInfo, ...]
+    outputs: Tuple[TensorInfo, ...]
+
+    def run(self, *arrays: np.ndarray) -> List[np.ndarray]:
+        results = self._invoke(_check_arrays(self, arrays))
+        return [result if info.scale is None else dequantize(result, info)
+                for info, result in zip(self.outputs, results)]
+
+    def _invoke(self, arrays: List[np.ndarray]) -> List[np.ndarray]:
+        raise NotImplementedError
+
+
+class _TfliteModel(RuntimeModel):
     """A .tflite model in LiteRT's or tflite_runtime's interpreter (the same Python API)."""
 
     def __init__(self, path: str, threads: int, interpreter_module, runtime: str):
@@ -157,25 +240,35 @@ class _TfliteModel:
                              % (path, runtime, _one_line(error))) from None
         self._input_details = self._interpreter.get_input_details()
         self._output_details = self._interpreter.get_output_details()
-        self.inputs = tuple(_tflite_info(detail) for detail in self._input_details)
-        self.outputs = tuple(_tflite_info(detail) for detail in self._output_details)
+        self.inputs = tuple(_tflite_info(path, detail) for detail in self._input_details)
+        self.outputs = tuple(_tflite_info(path, detail) for detail in self._output_details)
 
-    def run(self, *arrays: np.ndarray) -> List[np.ndarray]:
-        for detail, array in zip(self._input_details, _check_arrays(self, arrays)):
+    def _invoke(self, arrays: List[np.ndarray]) -> List[np.ndarray]:
+        for detail, array in zip(self._input_details, arrays):
             self._interpreter.set_tensor(detail['index'], array)
         self._interpreter.invoke()
         return [self._interpreter.get_tensor(detail['index']).copy()
                 for detail in self._output_details]
 
 
-def _tflite_info(detail: dict) -> TensorInfo:
+def _tflite_info(path: str, detail: dict) -> TensorInfo:
     signature = detail.get('shape_signature')
     shape = signature if signature is not None and len(signature) else detail['shape']
-    return TensorInfo(detail['name'], tuple(int(size) for size in shape),
-                      np.dtype(detail['dtype']))
+    dtype = np.dtype(detail['dtype'])
+    scales = detail.get('quantization_parameters', {}).get('scales', ())
+    if len(scales) > 1:
+        raise ModelError("%s: '%s' is quantised per channel (%d scales): py_vision feeds and "
+                         'reads inputs and outputs quantised per tensor only'
+                         % (path, detail['name'], len(scales)))
+    scale, zero_point = detail.get('quantization', (0.0, 0))
+    if dtype.kind not in 'iu' or not scale > 0:
+        scale, zero_point = None, 0
+    return TensorInfo(detail['name'], tuple(int(size) for size in shape), dtype,
+                      None if scale is None else float(scale), int(zero_point))
 
 
-def _signature(path: str) -> Tuple[Tuple[TensorInfo, ...], Tuple[TensorInfo, ...]]:
+def _signature(path: str) -> Tuple[Tuple[TensorInfo, ...], Tuple[TensorInfo, ...], bytes]:
+    """Return an .onnx file's inputs and outputs, and its contents."""
     with open(path, 'rb') as model_file:
         data = model_file.read()
     try:
@@ -183,17 +276,17 @@ def _signature(path: str) -> Tuple[Tuple[TensorInfo, ...], Tuple[TensorInfo, ...
     except OnnxFormatError as error:
         raise ModelError('%s: not an ONNX model (the file %s)' % (path, error)) from None
     return (tuple(TensorInfo(*item) for item in inputs),
-            tuple(TensorInfo(*item) for item in outputs))
+            tuple(TensorInfo(*item) for item in outputs), data)
 
 
-class _OnnxruntimeModel:
+class _OnnxruntimeModel(RuntimeModel):
     """An .onnx model in an onnxruntime session on the CPU."""
 
     def __init__(self, path: str, threads: int, onnxruntime):
         self.path = path
         self.runtime = 'onnxruntime %s' % onnxruntime.__version__
         self.threads = threads
-        self.inputs, self.outputs = _signature(path)
+        self.inputs, self.outputs, _ = _signature(path)
         options = onnxruntime.SessionOptions()
         options.intra_op_num_threads = threads
         options.inter_op_num_threads = 1
@@ -204,40 +297,55 @@ class _OnnxruntimeModel:
             raise ModelError('%s: onnxruntime cannot load it: %s'
                              % (path, _one_line(error))) from None
 
-    def run(self, *arrays: np.ndarray) -> List[np.ndarray]:
-        feed = {info.name: array for info, array in zip(self.inputs, _check_arrays(self, arrays))}
+    def _invoke(self, arrays: List[np.ndarray]) -> List[np.ndarray]:
+        feed = {info.name: array for info, array in zip(self.inputs, arrays)}
         return list(self._session.run([info.name for info in self.outputs], feed))
 
 
-class _OpencvModel:
+class _OpencvModel(RuntimeModel):
     """
     An .onnx model in OpenCV's DNN module.
 
     OpenCV's DNN runs on OpenCV's own thread pool, which the whole process shares
     (cv2.setNumThreads): the model does not change it, and `threads` says what it is.
+
+    A model with quantised inputs or outputs runs without its edge DequantizeLinear and
+    QuantizeLinear nodes (onnx_graph.without_edge_quantization), which are done here with the
+    same numbers: OpenCV 4.6 returns garbage for a QuantizeLinear's output and shifts a uint8
+    input's zero point by 128 (measured with the tests' quantised model), OpenCV 5 does not.
     """
 
     def __init__(self, path: str, threads: int, cv2):
         self.path = path
         self.runtime = 'OpenCV DNN %s' % cv2.__version__
-        self.inputs, self.outputs = _signature(path)
+        self.inputs, self.outputs, data = _signature(path)
+        self._renamed: Dict[str, str] = {}
         try:
-            self._net = cv2.dnn.readNetFromONNX(path)
+            if any(info.scale is not None for info in self.inputs + self.outputs):
+                data, self._renamed = without_edge_quantization(data)
+                self._net = cv2.dnn.readNetFromONNX(np.frombuffer(data, np.uint8))
+            else:
+                self._net = cv2.dnn.readNetFromONNX(path)
         except cv2.error as error:
             raise ModelError('%s: OpenCV DNN cannot load it: %s'
                              % (path, _one_line(error))) from None
         self.threads = max(1, cv2.getNumThreads())
         self._error = cv2.error
 
-    def run(self, *arrays: np.ndarray) -> List[np.ndarray]:
-        for info, array in zip(self.inputs, _check_arrays(self, arrays)):
-            self._net.setInput(array, info.name)
+    def _invoke(self, arrays: List[np.ndarray]) -> List[np.ndarray]:
+        for info, array in zip(self.inputs, arrays):
+            if info.name in self._renamed:
+                self._net.setInput(dequantize(array, info), self._renamed[info.name])
+            else:
+                self._net.setInput(array, info.name)
         try:
-            results = self._net.forward([info.name for info in self.outputs])
+            results = self._net.forward([self._renamed.get(info.name, info.name)
+                                         for info in self.outputs])
         except self._error as error:
             raise ModelError('%s: OpenCV DNN cannot run it: %s'
                              % (self.path, _one_line(error))) from None
-        return [np.asarray(result) for result in results]
+        return [quantize(result, info) if info.name in self._renamed else np.asarray(result)
+                for info, result in zip(self.outputs, results)]
 
 
 def _import(module: str):

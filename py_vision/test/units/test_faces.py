@@ -21,12 +21,16 @@ astronaut.png (512x512): x 180 to 268, y 78 to 175, her eyes at (203, 100) and (
 camera.png (512x512, the cameraman in profile): x 182 to 262, y 120 to 205.
 """
 
+import math
+
 import cv2
 import numpy as np
+import onnx_model
 from photos import photo
 from py_vision.capture.synthetic_picture import synthetic_frame
+from py_vision.models.anchors import AnchorOptions, ssd_anchors
 from py_vision.models.faces import Face, FaceDetector
-from py_vision.models.runtime import ModelError
+from py_vision.models.runtime import load, ModelError
 import pytest
 
 ASTRONAUT_FACE = (180, 78, 88, 97)
@@ -124,3 +128,24 @@ def test_another_model_is_refused_by_name():
         FaceDetector.from_file(
             FaceDetector.from_file().model.path.replace('face_detection_short_range',
                                                         'palm_detection_lite'))
+
+
+@pytest.mark.parametrize('runtime, module', [('opencv', 'cv2'), ('onnxruntime', 'onnxruntime')])
+def test_a_model_exported_again_with_its_outputs_in_another_order_is_read_by_name(
+        tmp_path, runtime, module):
+    # The face model's signature as ONNX, its scores listed before its regressors: one anchor
+    # scores (logit 3), its box 24 input pixels square, its first keypoint (6, -4) from it.
+    pytest.importorskip(module, reason='%s is not installed in this run' % runtime)
+    anchors = ssd_anchors(AnchorOptions(128, 128, (8, 16, 16, 16)))
+    index = 333
+    regressors, scores = onnx_model.one_detection(anchors, 16, index, 24, (6, -4))
+    path = onnx_model.write(tmp_path / 'face.onnx', onnx_model.constant_model_bytes(
+        'input', (1, 128, 128, 3), [('classificators', scores), ('regressors', regressors)]))
+    detector = FaceDetector(load(str(path), runtime=runtime))
+    # A 256-pixel square frame is the 128-pixel input twice as large.
+    face = only_face(detector.detect(np.zeros((256, 256, 3), np.uint8)))
+    x, y = anchors[index, :2] * 256
+    assert face.box == pytest.approx([x - 24, y - 24, 48, 48], abs=1e-3)
+    assert face.keypoints[0] == pytest.approx([x + 12, y - 8], abs=1e-3)
+    assert face.keypoints[1:] == pytest.approx(np.tile([x, y], (5, 1)), abs=1e-3)
+    assert face.score == pytest.approx(1 / (1 + math.exp(-3)), rel=1e-5)

@@ -29,12 +29,14 @@ import cv2
 from hand_poses import FOLDED, place, pose, THUMB_ACROSS
 from hypothesis import given, settings, strategies as st
 import numpy as np
+import onnx_model
 from photos import hand_photo, photo
 from py_vision.capture.synthetic_picture import synthetic_frame
+from py_vision.models.anchors import AnchorOptions, ssd_anchors
 from py_vision.models.crops import rotated_crop
 from py_vision.models.hands import HAND_LANDMARKS, HandTracker, landmark_region
-from py_vision.models.palm import hand_region, Palm, upright_rotation
-from py_vision.models.runtime import ModelError
+from py_vision.models.palm import hand_region, Palm, PalmDetector, upright_rotation
+from py_vision.models.runtime import load, ModelError
 from py_vision.models.signs import classify
 import pytest
 
@@ -279,3 +281,52 @@ def test_other_models_are_refused_by_name(tracker):
         HandTracker.from_files(palm_path=face)
     with pytest.raises(ModelError, match='face_detection_short_range.tflite: not the model'):
         HandTracker.from_files(landmark_path=face)
+
+
+ONNX_RUNTIMES = [('opencv', 'cv2'), ('onnxruntime', 'onnxruntime')]
+
+
+@pytest.mark.parametrize('runtime, module', ONNX_RUNTIMES)
+def test_a_landmark_model_exported_again_with_its_outputs_in_another_order_reads_the_same(
+        tracker, tmp_path, runtime, module):
+    # hand_landmark_lite's signature as ONNX, its outputs listed in another order: the world
+    # landmarks first, handedness before presence. Presence and handedness have the same shape:
+    # read by position, the left-hand score 0.2 would be taken for the presence (no hand).
+    pytest.importorskip(module, reason='%s is not installed in this run' % runtime)
+    angles = np.linspace(0, 2 * math.pi, 21, endpoint=False)
+    points = np.stack([112 + 50 * np.cos(angles), 112 + 50 * np.sin(angles), np.zeros(21)], 1)
+    outputs = [('Identity_3', np.full((1, 63), 0.01)), ('Identity_2', [[0.2]]),
+               ('Identity_1', [[0.9]]), ('Identity', points.reshape(1, 63))]
+    path = onnx_model.write(tmp_path / 'landmarks.onnx', onnx_model.constant_model_bytes(
+        'input_1', (1, 224, 224, 3), outputs))
+    exported = HandTracker(tracker.palms.model, load(str(path), runtime=runtime), max_hands=1,
+                           track=False)
+    image = hand_photo()
+    hands = exported.find(image)
+    assert len(hands) == 1, 'the presence score was not read as the presence'
+    hand = hands[0]
+    # The model sees no left hand (0.2): in an unmirrored picture, the person's left hand.
+    assert hand.score == pytest.approx(0.9) and hand.handedness == 'left'
+    # The landmarks circle the hand region's centre, 50/224 of its side away (the world
+    # landmarks, 0.01 pixels in the crop, would all sit at its corner).
+    region = hand_region(tracker.palms.detect(image)[0])
+    offsets = hand.landmarks[:, :2] - (region.x, region.y)
+    assert offsets.mean(axis=0) == pytest.approx([0, 0], abs=1e-2)
+    assert np.hypot(*offsets.T) == pytest.approx(np.full(21, 50 * region.side / 224), rel=1e-4)
+
+
+@pytest.mark.parametrize('runtime, module', ONNX_RUNTIMES)
+def test_a_palm_model_exported_again_with_its_outputs_in_another_order_is_read_by_name(
+        tmp_path, runtime, module):
+    pytest.importorskip(module, reason='%s is not installed in this run' % runtime)
+    anchors = ssd_anchors(AnchorOptions(192, 192, (8, 16, 16, 16)))
+    index = 1500
+    regressors, scores = onnx_model.one_detection(anchors, 18, index, 30, (0, 10))
+    path = onnx_model.write(tmp_path / 'palm.onnx', onnx_model.constant_model_bytes(
+        'input_1', (1, 192, 192, 3), [('Identity_1', scores), ('Identity', regressors)]))
+    palms = PalmDetector(load(str(path), runtime=runtime)).detect(np.zeros((192, 192, 3),
+                                                                           np.uint8))
+    assert len(palms) == 1
+    x, y = anchors[index, :2] * 192
+    assert palms[0].box == pytest.approx([x - 15, y - 15, 30, 30], abs=1e-3)
+    assert palms[0].keypoints[0] == pytest.approx([x, y + 10], abs=1e-3)

@@ -13,19 +13,28 @@
 # limitations under the License.
 
 
-"""The model runtimes: both .tflite runtimes where installed, ONNX through OpenCV, each error."""
+"""
+The model runtimes: both .tflite runtimes where installed, ONNX through OpenCV, each error.
+
+Also the outputs found by name (find_outputs), and quantised models, fed and read in float:
+an ONNX one (onnx_model: QDQ at its edges) through OpenCV's DNN and onnxruntime, a .tflite one
+(tflite_model) through LiteRT and tflite_runtime, against the same computation in numpy.
+"""
 
 import hashlib
 import importlib.util
 import os
 import re
 import sys
+from types import SimpleNamespace
 
 import numpy as np
 import onnx_model
 from py_vision.models.files import SHIPPED, shipped_model
-from py_vision.models.runtime import load, ModelError, RuntimeMissing
+from py_vision.models.onnx_graph import read_signature
+from py_vision.models.runtime import find_outputs, load, ModelError, RuntimeMissing, TensorInfo
 import pytest
+import tflite_model
 
 FACE = 'face_detection_short_range.tflite'
 TFLITE_MODULES = {'litert': 'ai_edge_litert', 'tflite_runtime': 'tflite_runtime'}
@@ -73,9 +82,10 @@ def test_tflite_runtime_loads_and_runs_the_face_model(runtime):
     assert re.search(r' \d+\.\d+', model.runtime), model.runtime
     assert model.threads == 2
     assert model.path.endswith(FACE)
-    assert [(info.name, info.shape, info.dtype) for info in model.inputs] == [
-        ('input', (1, 128, 128, 3), np.dtype(np.float32))]
+    assert model.inputs == (TensorInfo('input', (1, 128, 128, 3), np.dtype(np.float32)),)
     assert [info.shape for info in model.outputs] == [(1, 896, 16), (1, 896, 1)]
+    # A float model: no scale, zero point 0.
+    assert all(info.scale is None and info.zero_point == 0 for info in model.outputs)
     regressors, scores = model.run(np.zeros((1, 128, 128, 3), np.float32))
     assert regressors.shape == (1, 896, 16) and scores.shape == (1, 896, 1)
     assert np.all(np.isfinite(regressors))
@@ -104,8 +114,8 @@ def test_onnx_model_runs_and_computes_what_it_should(runtime, tiny_onnx):
     needs(runtime)
     model = load(tiny_onnx, runtime=runtime)
     assert model.runtime.startswith(RUNTIME_NAMES[runtime])
-    assert [(info.name, info.shape) for info in model.inputs] == [('x', (1, 3, 4, 4))]
-    assert [(info.name, info.shape) for info in model.outputs] == [('y', (1, 3, 4, 4))]
+    assert model.inputs == (TensorInfo('x', (1, 3, 4, 4), np.dtype(np.float32)),)
+    assert model.outputs == (TensorInfo('y', (1, 3, 4, 4), np.dtype(np.float32)),)
     x = np.random.default_rng(7).normal(size=onnx_model.INPUT_SHAPE).astype(np.float32)
     (y,) = model.run(x)
     np.testing.assert_allclose(y, onnx_model.expected(x), rtol=1e-6, atol=1e-6)
@@ -242,3 +252,133 @@ def test_a_model_not_shipped_is_a_model_error():
         shipped_model('hand_landmark_full.tflite')
     message = one_line_naming(raised.value, 'hand_landmark_full.tflite')
     assert 'no such model shipped with py_vision' in message
+
+
+# The shipped models' outputs, as the runtimes read them: the names the steps look them up by.
+SHIPPED_OUTPUTS = {
+    'palm_detection_lite.tflite': [('Identity', (1, 2016, 18)), ('Identity_1', (1, 2016, 1))],
+    'hand_landmark_lite.tflite': [('Identity', (1, 63)), ('Identity_1', (1, 1)),
+                                  ('Identity_2', (1, 1)), ('Identity_3', (1, 63))],
+    'face_detection_short_range.tflite': [('regressors', (1, 896, 16)),
+                                          ('classificators', (1, 896, 1))],
+}
+
+
+@pytest.mark.parametrize('name', SHIPPED)
+def test_the_shipped_models_outputs_have_the_names_the_steps_read(name):
+    model = load(shipped_model(name))
+    assert [(info.name, info.shape) for info in model.outputs] == SHIPPED_OUTPUTS[name]
+    assert all(info.dtype == np.float32 and info.scale is None for info in model.outputs)
+
+
+def fake_model(*outputs):
+    """Return a model of one (1, 8) input and these (name, shape) outputs, for find_outputs."""
+    return SimpleNamespace(path='fake.onnx', inputs=(TensorInfo('x', (1, 8), np.float32),),
+                           outputs=tuple(TensorInfo(name, shape, np.float32)
+                                         for name, shape in outputs))
+
+
+WANTED = [(('presence', 'flag'), (1, 1)), (('handedness',), (1, 1)), (('points',), (1, 9))]
+
+
+def test_find_outputs_by_name_in_any_order():
+    model = fake_model(('points', (1, 9)), ('handedness', (1, 1)), ('flag', (1, 1)))
+    assert find_outputs(model, [(1, 8)], WANTED) == (2, 1, 0)
+
+
+def test_find_outputs_by_position_where_the_names_are_unknown():
+    model = fake_model(('a', (1, 1)), ('b', (1, 1)), ('c', (1, 9)), ('d', (1, 4)))
+    assert find_outputs(model, [(1, 8)], WANTED) == (0, 1, 2)
+    # Some names known, not all: by position too.
+    model = fake_model(('presence', (1, 1)), ('b', (1, 1)), ('c', (1, 9)))
+    assert find_outputs(model, [(1, 8)], WANTED) == (0, 1, 2)
+
+
+@pytest.mark.parametrize('outputs', [
+    [('presence', (1, 1)), ('handedness', (1, 1)), ('points', (1, 10))],  # by name, wrong shape
+    [('a', (1, 9)), ('b', (1, 1)), ('c', (1, 1))],  # by position, wrong order of shapes
+    [('a', (1, 1)), ('b', (1, 1))],  # too few
+])
+def test_find_outputs_refuses_another_model(outputs):
+    with pytest.raises(ModelError, match='fake.onnx: not the model expected here'):
+        find_outputs(fake_model(*outputs), [(1, 8)], WANTED)
+
+
+def test_find_outputs_refuses_another_input():
+    model = fake_model(('presence', (1, 1)), ('handedness', (1, 1)), ('points', (1, 9)))
+    with pytest.raises(ModelError, match=r'fake.onnx: not the model expected here: its inputs '
+                                         r'are \(\(1, 8\),\)'):
+        find_outputs(model, [(1, 9)], WANTED)
+
+
+@pytest.mark.parametrize('form', ['raw', 'typed', 'constants'])
+def test_an_onnx_models_quantization_is_read_from_its_edge_nodes(form):
+    inputs, outputs = read_signature(onnx_model.quantized_model_bytes(form))
+    assert [(name, dtype, zero) for name, _, dtype, _, zero in inputs + outputs] == [
+        ('xq', np.int8, -5), ('yq', np.uint8, 12)]
+    assert [scale for *_, scale, _ in inputs + outputs] == pytest.approx([0.04, 0.03])
+
+
+@pytest.mark.parametrize('runtime', ['opencv', 'onnxruntime'])
+@pytest.mark.parametrize('form', ['raw', 'typed', 'constants'])
+def test_a_quantized_onnx_model_is_fed_and_read_in_float(tmp_path, runtime, form):
+    needs(runtime)
+    path = onnx_model.write(str(tmp_path / 'quantized.onnx'),
+                            onnx_model.quantized_model_bytes(form))
+    model = load(path, runtime=runtime)
+    (xq,), (yq,) = model.inputs, model.outputs
+    assert (xq.name, xq.dtype, xq.zero_point) == ('xq', np.int8, onnx_model.X_QUANT[1])
+    assert (yq.name, yq.dtype, yq.zero_point) == ('yq', np.uint8, onnx_model.Y_QUANT[1])
+    assert (xq.scale, yq.scale) == pytest.approx((onnx_model.X_QUANT[0], onnx_model.Y_QUANT[0]))
+    # Wide enough to reach both ends of int8 in and uint8 out.
+    x = np.random.default_rng(5).normal(scale=3, size=onnx_model.INPUT_SHAPE).astype(np.float32)
+    want = onnx_model.expected_quantized(x)
+    assert want.min() == 0 and want.max() == pytest.approx((255 - 12) * 0.03)
+    (y,) = model.run(x)
+    assert y.dtype == np.float32
+    np.testing.assert_allclose(y, want, rtol=0, atol=1e-6)
+    # Integers of the input's own type go in as they are: already quantised.
+    (again,) = model.run(onnx_model.quantize(x, onnx_model.X_QUANT, np.int8))
+    np.testing.assert_allclose(again, want, rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize('runtime', ['opencv', 'onnxruntime'])
+def test_an_integer_input_without_a_scale_takes_integers(tmp_path, runtime):
+    # An int8 input read by a Cast, not a DequantizeLinear: plain integers, not quantised.
+    needs(runtime)
+    path = onnx_model.write(str(tmp_path / 'integers.onnx'),
+                            onnx_model.integer_input_model_bytes())
+    model = load(path, runtime=runtime)
+    assert model.inputs[0].scale is None and model.inputs[0].dtype == np.int8
+    with pytest.raises(ModelError, match="input 0 'xq' wants int8 values, got float32"):
+        model.run(np.zeros(onnx_model.INPUT_SHAPE, np.float32))
+    values = np.arange(-24, 24, dtype=np.int8).reshape(onnx_model.INPUT_SHAPE)
+    np.testing.assert_array_equal(model.run(values)[0], values.astype(np.float32))
+
+
+@pytest.mark.parametrize('runtime', ['litert', 'tflite_runtime'])
+def test_a_quantized_tflite_model_is_fed_and_read_in_float(tmp_path, runtime):
+    needs(runtime)
+    model = load(tflite_model.write(str(tmp_path / 'quantized.tflite')), runtime=runtime)
+    (xq,), (yq,) = model.inputs, model.outputs
+    assert (xq.name, xq.shape, xq.dtype, xq.zero_point) == (
+        'xq', tflite_model.INPUT_SHAPE, np.int8, tflite_model.X_QUANT[1])
+    assert (yq.name, yq.dtype, yq.zero_point) == ('yq', np.uint8, tflite_model.Y_QUANT[1])
+    assert (xq.scale, yq.scale) == pytest.approx((tflite_model.X_QUANT[0],
+                                                  tflite_model.Y_QUANT[0]))
+    x = np.random.default_rng(6).normal(scale=3, size=tflite_model.INPUT_SHAPE)
+    want = tflite_model.expected(x)
+    # Both ends reached: the input's int8 at 127, the output's uint8 at 0.
+    assert (want.min(), want.max()) == pytest.approx(((0 - 12) * 0.03, (127 + 5) * 0.04))
+    (y,) = model.run(x)
+    assert y.dtype == np.float32
+    np.testing.assert_allclose(y, want, rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize('runtime', ['litert', 'tflite_runtime'])
+def test_a_tflite_input_quantized_per_channel_is_refused(tmp_path, runtime):
+    needs(runtime)
+    path = tflite_model.write(str(tmp_path / 'per_channel.tflite'), channels=4)
+    with pytest.raises(ModelError) as raised:
+        load(path, runtime=runtime)
+    assert "'xq' is quantised per channel (4 scales)" in one_line_naming(raised.value, path)
