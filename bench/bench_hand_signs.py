@@ -336,19 +336,23 @@ def summarise(results):
     return rows
 
 
-def a53_board(camera_ms, step_ms, viewer_ms, fps, cores):
+def a53_board(camera_ms, step_ms, receive_ms, viewer_ms, fps, cores):
     """
     Return (step fps, cores left) on a board of `cores` Cortex-A53s, from per-frame A53 times.
 
-    The camera takes its share at the full rate; the viewer's share grows with the step's
-    rate; the step processes as fast as one core allows, or what the camera and the viewer
-    leave of the board, at most at the camera's rate.
+    The camera takes its share at the full rate, and so does the step's receiving of every
+    frame (receive_ms: the bare subscriber's), whether it processes it or skips it; the rest of
+    the step's time a frame, and the viewer's, come with each processed frame. The step
+    processes as fast as one core allows, or as what the others leave of the board allows, at
+    most at the camera's rate. Negative cores left: the board cannot keep up.
     """
     camera = camera_ms * fps / 1000.0
+    receive = min(receive_ms, step_ms) * fps / 1000.0
+    per_frame = step_ms - min(receive_ms, step_ms) + viewer_ms
     step_fps = min(fps, 1000.0 / step_ms,
-                   max(0.0, cores - camera) * 1000.0 / (step_ms + viewer_ms))
-    used = camera + (step_ms + viewer_ms) * step_fps / 1000.0
-    return round(step_fps, 1), round(cores - used, 2)
+                   max(0.0, cores - camera - receive) * 1000.0 / per_frame)
+    used = camera + receive + per_frame * step_fps / 1000.0
+    return round(step_fps, 1), round(cores - used, 2) or 0.0  # never -0
 
 
 def a53_estimate(rows):
@@ -359,17 +363,21 @@ def a53_estimate(rows):
                                   key=lambda k: (-int(k[0].split('x')[0]), k[1], k[2])):
         nodes = {r['node']: r['cpu_ms_per_frame'] for r in rows
                  if (r['size'], r['fps'], r['case']) == (size, fps, case)}
+        # Receiving a frame: the bare subscriber's time a frame at that size and rate.
+        nodes['receive'] = next((r['cpu_ms_per_frame'] for r in rows if (
+            r['size'], r['fps'], r['case'], r['node']) == (size, fps, 'bare', 'step')), 0.0)
         if not all(nodes.get(n) for n in ('camera', 'step', 'viewer')):
             continue
         line = {'size': size, 'fps': fps, 'case': case}
         for factor in A53_FACTORS:
-            ms = {node: value * factor for node, value in nodes.items()}
+            ms = {node: (value or 0.0) * factor for node, value in nodes.items()}
+            times = (ms['camera'], ms['step'], ms['receive'], ms['viewer'], fps)
             line['x%g' % factor] = {
                 'camera_cores': round(ms['camera'] * fps / 1000.0, 2),
                 'step_ms_per_frame': round(ms['step'], 1),
                 'viewer_ms_per_frame': round(ms['viewer'], 1),
-                'two_cores': a53_board(ms['camera'], ms['step'], ms['viewer'], fps, 2),
-                'four_cores': a53_board(ms['camera'], ms['step'], ms['viewer'], fps, 4)}
+                'two_cores': a53_board(*times, cores=2),
+                'four_cores': a53_board(*times, cores=4)}
         estimate.append(line)
     return estimate
 
@@ -420,7 +428,14 @@ def main():
                              'its own (the first also for circle)')
     parser.add_argument('--cases', default=','.join(CASES), help='cases, comma-separated')
     parser.add_argument('--hand-photo', default='', help='photograph of a hand for the clip')
+    parser.add_argument('--tables-of', metavar='JSON',
+                        help='print the tables of a results file written before, measure nothing')
     options = parser.parse_args()
+    if options.tables_of:
+        saved = json.loads(Path(options.tables_of).read_text())
+        rows = summarise(saved['runs'])
+        print_tables(rows, a53_estimate(rows), saved['load_average'])
+        return
     sizes = [tuple(int(v) for v in size.split('x')) for size in options.sizes.split(',')]
     rates = [float(rate) for rate in options.rates.split(',')]
     cases = options.cases.split(',')
