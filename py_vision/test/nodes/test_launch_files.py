@@ -260,11 +260,11 @@ def test_hand_signs_runs_camera_step_viewer_and_turtlesim_where_installed(ros2_l
 
 
 # A stand-in for turtlesim_node: says it started, ends cleanly on Ctrl-C. No window.
-STAND_IN_TURTLESIM = '''import signal
-signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
-print('stand-in turtlesim_node', flush=True)
-signal.sigwait({signal.SIGINT, signal.SIGTERM})
-'''
+STAND_IN_TURTLESIM = (
+    'import signal\n'
+    'signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})\n'
+    "print('stand-in turtlesim_node', flush=True)\n"
+    'signal.sigwait({signal.SIGINT, signal.SIGTERM})\n')
 
 
 def install_stand_in_turtlesim(prefix):
