@@ -17,14 +17,23 @@ Hand signs drive the turtle: camera, the hand_signs step, the viewer, and turtle
 
     ros2 launch py_vision hand_signs.launch.py
     ros2 launch py_vision hand_signs.launch.py video_device:=/dev/video2 display:=web
+    ros2 launch py_vision hand_signs.launch.py video_device:=auto display:=web \
+        web_host:=0.0.0.0                                    # on a board, watched from a PC
 
 usb_camera/image -> vision_step (step hand_signs) -> vision_step/image -> usbcam_subscriber,
 and vision_step's Twist on /turtle1/cmd_vel -> turtlesim_node, where the turtlesim package is
-installed (the PetaLinux fragments install it on the boards; otherwise one line says it is
-not, and the rest runs). The camera's arguments are camera.launch.py's; display, web_host,
-web_port and web_token set the viewer's parameters of those names (empty: the value in
-params_file). docs/processing.md has the signs and their motions.
+installed (the PetaLinux fragments install it on the boards) and there is a display to open
+its window on (DISPLAY, WAYLAND_DISPLAY or a QT_QPA_PLATFORM of your choice); otherwise one
+line says why not, and the rest runs. The camera's arguments are camera.launch.py's, except
+that on an ARM board framerate, and on one of two cores the size, have defaults of their own
+(board_defaults, below); threads sets vision_step's; display, web_host, web_port and
+web_token set the viewer's parameters of those names (empty: the value in params_file).
+docs/processing.md has the signs and their motions, docs/boards.md what the pipeline costs on
+the boards and why these defaults.
 """
+
+import os
+import platform
 
 from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
 from launch import LaunchDescription
@@ -36,6 +45,32 @@ from launch_ros.actions import Node
 from launch_ros.parameter_descriptions import ParameterValue
 from launch_ros.substitutions import FindPackageShare
 
+# The camera on the boards' Cortex-A53s (docs/boards.md, from bench/bench_hand_signs.py): the
+# step processes 1 to 4 frames a second there, and every frame the camera takes beyond that
+# costs the camera and the step's subscription CPU for nothing; on two cores (the ZUBoard 1CG)
+# 640x480 leaves nothing of the board, 320x240 some (the models see the same either way).
+BOARD_FRAMERATE = '5.0'
+TWO_CORE_SIZE = {'image_width': '320', 'image_height': '240'}
+ARM_MACHINES = ('aarch64', 'arm64', 'armv7l', 'armv8l')
+# The camera's arguments with a default of this launch's own: name -> meaning.
+BOARD_ARGUMENTS = {
+    'framerate': 'frames per second (%s on an ARM board, where the step processes a few frames '
+                 'a second; elsewhere empty: the value in params_file)' % BOARD_FRAMERATE,
+    'image_width': 'requested frame width in pixels (%s on an ARM board of two cores; elsewhere '
+                   'empty: the value in params_file)' % TWO_CORE_SIZE['image_width'],
+    'image_height': 'requested frame height in pixels (%s on an ARM board of two cores; '
+                    'elsewhere empty: the value in params_file)' % TWO_CORE_SIZE['image_height'],
+}
+
+# What tells Qt, and so turtlesim's window, where to draw.
+DISPLAY_VARIABLES = ('DISPLAY', 'WAYLAND_DISPLAY', 'QT_QPA_PLATFORM')
+
+# vision_step's parameters that are launch arguments: name -> (type the node takes, meaning).
+STEP_ARGUMENTS = {
+    'threads': (int, 'CPU threads of the hand and palm models; 1 keeps the step from waiting '
+                     'on cores the camera and the viewer hold'),
+}
+
 # The viewer parameters that are launch arguments: name -> (type the node takes, meaning).
 VIEWER_ARGUMENTS = {
     'display': (str, 'where the viewer shows the processed frames: window, web, none or auto'),
@@ -45,6 +80,32 @@ VIEWER_ARGUMENTS = {
     'web_token': (str, 'the token the browser viewer requires off loopback (empty in '
                        'params_file: a random one, logged as the URL to open)'),
 }
+
+
+def board_defaults():
+    """
+    Return the camera arguments this launch gives by default on this machine: none on a PC.
+
+    On an ARM machine (the boards: Cortex-A53s) the camera runs at BOARD_FRAMERATE, and with
+    two cores or fewer (the ZUBoard 1CG) at 320x240 too. Elsewhere (a PC, whose step keeps up
+    with the camera) the values in params_file.
+    """
+    if platform.machine().lower() not in ARM_MACHINES:
+        return {}
+    defaults = {'framerate': BOARD_FRAMERATE}
+    if (os.cpu_count() or 1) <= 2:
+        defaults.update(TWO_CORE_SIZE)
+    return defaults
+
+
+def start_step(context):
+    """Return vision_step running hand_signs, with the step arguments given."""
+    given = {name: ParameterValue(LaunchConfiguration(name), value_type=kind)
+             for name, (kind, _) in STEP_ARGUMENTS.items()
+             if LaunchConfiguration(name).perform(context)}
+    return [Node(package='py_vision', executable='vision_step', output='screen',
+                 parameters=[LaunchConfiguration('params_file'),
+                             dict(given, step='hand_signs')])]
 
 
 def start_viewer(context):
@@ -58,13 +119,19 @@ def start_viewer(context):
 
 
 def start_turtlesim(context):
-    """Return turtlesim_node where turtlesim is installed, else a line saying it is not."""
+    """Return turtlesim_node where it is installed and has a display, else a line saying why."""
     try:
         get_package_share_directory('turtlesim')
     except PackageNotFoundError:
         return [LogInfo(msg='turtlesim is not installed: not started; the Twists still go '
                             'out on /turtle1/cmd_vel (install ros-<distro>-turtlesim to see '
                             'the turtle move)')]
+    # Its Qt window needs a display: without one turtlesim_node aborts at start.
+    if not any(os.environ.get(name) for name in DISPLAY_VARIABLES):
+        return [LogInfo(msg='no display here (DISPLAY is not set): turtlesim not started; the '
+                            'Twists still go out on /turtle1/cmd_vel, for a turtlesim on a '
+                            "machine with a screen (DISPLAY=:0 for a board's own, ssh -X for "
+                            "your PC's: docs/boards.md)")]
     return [Node(package='turtlesim', executable='turtlesim_node', output='screen')]
 
 
@@ -75,13 +142,17 @@ def generate_launch_description():
             'params_file', description='parameter file of the py_vision nodes',
             default_value=PathJoinSubstitution(
                 [FindPackageShare('py_vision'), 'config', 'params.yaml'])),
+        # Declared before camera.launch.py, whose own declarations then keep these defaults.
+        *[DeclareLaunchArgument(name, default_value=board_defaults().get(name, ''),
+                                description=meaning)
+          for name, meaning in BOARD_ARGUMENTS.items()],
         *[DeclareLaunchArgument(name, default_value='',
                                 description='%s (empty: the value in params_file)' % meaning)
-          for name, (_, meaning) in VIEWER_ARGUMENTS.items()],
+          for name, (_, meaning) in list(STEP_ARGUMENTS.items()) + list(
+              VIEWER_ARGUMENTS.items())],
         IncludeLaunchDescription(PythonLaunchDescriptionSource(PathJoinSubstitution(
             [FindPackageShare('py_vision'), 'launch', 'camera.launch.py']))),
-        Node(package='py_vision', executable='vision_step', output='screen',
-             parameters=[LaunchConfiguration('params_file'), {'step': 'hand_signs'}]),
+        OpaqueFunction(function=start_step),
         OpaqueFunction(function=start_viewer),
         OpaqueFunction(function=start_turtlesim),
     ])

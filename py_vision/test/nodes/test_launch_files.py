@@ -18,7 +18,10 @@ The installed launch files, run for real with `ros2 launch`, every argument chec
 Each launch file is started with its arguments, and what every node really got is read back:
 its parameters over its parameter services (as `ros2 param get` does), what it opened (its
 log), where the viewer listens (its socket, and the token it asks for), the lifecycle state of a
-managed camera. This needs launch_ros and ros2cli: the board-version run has the boards' own
+managed camera. What hand_signs.launch.py does on a board is seen by running `ros2 launch` as
+on one (its process told that the machine is aarch64), and turtlesim through a stand-in package
+whose node only waits for Ctrl-C (the tests' environments have no turtlesim, nor a screen).
+This needs launch_ros and ros2cli: the board-version run has the boards' own
 (Humble: launch_ros 0.19.2, ros2cli 0.18.3), as has `colcon test` on a ROS installation. The
 PyPI Jazzy wheels of the main run have neither: there these tests are skipped with that reason.
 """
@@ -27,6 +30,7 @@ import importlib.util
 import re
 import shutil
 import subprocess
+import sys
 import urllib.error
 import urllib.request
 
@@ -54,11 +58,18 @@ PROMISED = {
     'camera.launch.py': CAMERA_ARGUMENTS,
     'pipeline.launch.py': CAMERA_ARGUMENTS | {'display', 'web_host', 'web_port', 'web_token'},
     'two_cameras.launch.py': CAMERA_ARGUMENTS | {'front_device', 'rear_device'},
-    'hand_signs.launch.py': CAMERA_ARGUMENTS | {'display', 'web_host', 'web_port', 'web_token'},
+    'hand_signs.launch.py': CAMERA_ARGUMENTS | {'threads', 'display', 'web_host', 'web_port',
+                                                'web_token'},
 }
 TOKEN = 'launch-test-token-0123456789'
 # Generous: Humble's launch, three nodes and their DDS discovery on a loaded 2-core machine.
 START_S = 30.0
+# Runs `ros2 launch` (the script named next) as on a machine MACHINE/CPUS (the first
+# argument): platform.machine() and os.cpu_count() answer that in this process, where the launch
+# file runs and takes its defaults; the nodes are processes of their own, untouched.
+AS_ON_MACHINE = ("import os, platform, runpy, sys; machine, cpus = sys.argv.pop(1).split('/'); "
+                 'platform.machine = lambda: machine; os.cpu_count = lambda: int(cpus); '
+                 "sys.argv.pop(0); runpy.run_path(sys.argv[0], run_name='__main__')")
 
 
 @pytest.fixture
@@ -66,10 +77,15 @@ def ros2_launch(ros_env, request):
     """Start `ros2 launch py_vision FILE name:=value ...`; stopped (Ctrl-C) after the test."""
     started = request.node.node_processes = []
 
-    def start(launch_file, **arguments):
+    def start(launch_file, machine=None, env=None, **arguments):
         args = ['launch', 'py_vision', launch_file] + [
             '%s:=%s' % (name, value) for name, value in arguments.items()]
-        proc = ros_harness.NodeProcess(ROS2, args, ros_env, name=launch_file)
+        if machine is None:
+            proc = ros_harness.NodeProcess(ROS2, args, env or ros_env, name=launch_file)
+        else:
+            proc = ros_harness.NodeProcess(
+                sys.executable, ['-c', AS_ON_MACHINE, machine, ROS2] + args, env or ros_env,
+                name=launch_file)
         started.append(proc)
         return proc
     yield start
@@ -241,6 +257,71 @@ def test_hand_signs_runs_camera_step_viewer_and_turtlesim_where_installed(ros2_l
     else:
         assert 'turtlesim is not installed: not started' in proc.output(), proc.tail()
     stops_cleanly(proc, nodes)
+
+
+# A stand-in for turtlesim_node: says it started, ends cleanly on Ctrl-C. No window.
+STAND_IN_TURTLESIM = (
+    'import signal\n'
+    'signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})\n'
+    "print('stand-in turtlesim_node', flush=True)\n"
+    'signal.sigwait({signal.SIGINT, signal.SIGTERM})\n')
+
+
+def install_stand_in_turtlesim(prefix):
+    """Make a prefix in which the ament index finds a turtlesim package and its node."""
+    index = prefix / 'share' / 'ament_index' / 'resource_index' / 'packages'
+    index.mkdir(parents=True)
+    (index / 'turtlesim').write_text('')
+    (prefix / 'share' / 'turtlesim').mkdir()
+    node = prefix / 'lib' / 'turtlesim' / 'turtlesim_node'
+    node.parent.mkdir(parents=True)
+    node.write_text('#!%s\n%s' % (sys.executable, STAND_IN_TURTLESIM))
+    node.chmod(0o755)
+
+
+@needs_launch
+@pytest.mark.parametrize('display', [':0', None])
+def test_hand_signs_starts_turtlesim_only_where_it_has_a_display(
+        ros2_launch, peer, ros_env, tmp_path, display):
+    # turtlesim's Qt window aborts without a display: a board reached by plain ssh has none.
+    install_stand_in_turtlesim(tmp_path)
+    env = dict(ros_env, AMENT_PREFIX_PATH='%s:%s' % (tmp_path, ros_env['AMENT_PREFIX_PATH']))
+    for name in ('DISPLAY', 'WAYLAND_DISPLAY', 'QT_QPA_PLATFORM'):
+        env.pop(name, None)
+    if display:
+        env['DISPLAY'] = display
+    twists = peer.collect(Twist, '/turtle1/cmd_vel')
+    proc = ros2_launch('hand_signs.launch.py', env=env, video_device='synthetic',
+                       image_width=320, image_height=240, display='none')
+    wait_until(lambda: len(twists) >= 3, START_S, what='Twists from the step')
+    nodes = ['usbcam_publisher', 'vision_step', 'usbcam_subscriber']
+    if display:
+        proc.wait_for_output(r'\[turtlesim_node-\d+\] stand-in turtlesim_node', START_S)
+        nodes.append('turtlesim_node')
+    else:
+        assert 'no display here (DISPLAY is not set): turtlesim not started' in proc.output()
+        assert 'turtlesim_node' not in proc.output(), proc.tail()
+    stops_cleanly(proc, nodes)
+
+
+@needs_launch
+@pytest.mark.parametrize('machine, given, camera', [
+    ('aarch64/2', {}, (320, 240, 5.0)),                   # ZUBoard 1CG: two Cortex-A53s
+    ('aarch64/4', {'framerate': 12}, (640, 480, 12.0)),   # four: the size of params_file;
+    ('x86_64/2', {'threads': 2}, (640, 480, 10.0)),       # an argument wins; a PC: params_file
+])
+def test_hand_signs_camera_on_a_board_and_on_a_pc_and_threads_reach_the_step(
+        ros2_launch, peer, machine, given, camera):
+    twists = peer.collect(Twist, '/turtle1/cmd_vel')
+    proc = ros2_launch('hand_signs.launch.py', machine=machine, video_device='synthetic',
+                       display='none', **given)
+    proc.wait_for_output(r'\[usbcam_publisher\]: opened synthetic: %dx%d \w+ at %g fps' % camera,
+                         START_S)
+    assert parameters(peer, 'usbcam_publisher', ['image_width', 'image_height', 'framerate']) \
+        == dict(zip(('image_width', 'image_height', 'framerate'), camera))
+    assert parameters(peer, 'vision_step', ['step', 'threads']) == {
+        'step': 'hand_signs', 'threads': given.get('threads', 1)}
+    wait_until(lambda: len(twists) >= 3, START_S, what='Twists from the step')
 
 
 @needs_launch
