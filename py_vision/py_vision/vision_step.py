@@ -100,7 +100,7 @@ class ProcessingStats:
         self.published = 0  # outputs published on the image topic (it had subscribers)
 
     def add_output(self, age_s: Optional[float], width: int, height: int) -> int:
-        """Record one published frame and how old it was (None: not stamped); return how many."""
+        """Record one output (published or not) and its age (None: unstamped); return how many."""
         if age_s is not None:
             self.worker.record_age(age_s)
         with self._lock:

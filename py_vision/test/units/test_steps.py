@@ -23,6 +23,7 @@ model double whose scores are lowered: min_score below 0.5 letting through a fac
 """
 
 import json
+import threading
 
 from builtin_interfaces.msg import Time
 from fake_clock import FakeClock
@@ -37,7 +38,7 @@ from py_vision.steps.api import StepContext
 from py_vision.steps.circle import Circle
 from py_vision.steps.faces import Faces
 from py_vision.steps.hand_signs import HandSigns, MAX_ANGULAR, MAX_LINEAR, motion
-from py_vision.vision_step import VisionStep
+from py_vision.vision_step import StepPublishers, VisionStep
 import pytest
 from std_msgs.msg import Header, String
 
@@ -331,3 +332,36 @@ def test_faces_min_score_below_half_finds_a_face_scoring_less_than_half():
     step.parameters_changed({'min_score': 0.5})
     step.process(astronaut.copy(), Header())
     assert face_scores(publisher.sent[-1]) == []
+
+
+class AckedPublisher(FakePublisher):
+    """A FakePublisher that says how long it was given to be acknowledged."""
+
+    def __init__(self, msg_type, topic):
+        super().__init__(msg_type, topic)
+        self.waited = []
+
+    def wait_for_all_acked(self, timeout):
+        self.waited.append(timeout.nanoseconds / 1e9)
+        return True
+
+
+def test_after_the_stop_only_the_stopping_thread_publishes_through_the_steps_publishers():
+    node = FakeNode()
+    node.create_publisher = lambda msg_type, topic, depth: AckedPublisher(msg_type, topic)
+    owner = StepPublishers()
+    publisher = owner.create(node, String, 'said', 10)
+    assert publisher.topic_name == 'said'  # the rest is the real publisher's
+
+    def from_the_worker(text):
+        worker = threading.Thread(target=publisher.publish, args=(String(data=text),))
+        worker.start()
+        worker.join(10)
+    from_the_worker('before the stop')
+    owner.stop()
+    from_the_worker('from an abandoned process()')  # dropped
+    publisher.publish(String(data="the step's last word"))  # the stopping thread: sent
+    assert [m.data for m in owner.publishers[0].sent] == [
+        'before the stop', "the step's last word"]
+    assert owner.dropped == 1
+    assert owner.deliver(1.0) and 0 < owner.publishers[0].waited[0] <= 1.0
