@@ -27,6 +27,16 @@ line gives the time a frame took in the step (processing p50/p99: conversion, st
 over its last 5 s); at the end, the node's VmRSS with its models loaded, and how much more than
 cv_bridge_test's that is.
 Prints a Markdown table and writes bench/results/vision_step.json.
+
+  .venv/bin/python bench/bench_vision_step.py --lazy [--rounds N] [--duration S] [--steps ...]
+
+measures instead what publishing vision_step/image only while someone subscribes saves: for
+each step (default circle, the cheapest, and hand_signs) the node's CPU time (utime + stime
+from /proc) over --duration seconds, with a subscriber of vision_step/image in this process
+(what every frame cost before: the image published whoever listened) and without one, the two
+alternating for --rounds rounds, each on a fresh camera and node. Per processed frame (the
+count from the node's /diagnostics): CPU ms, medians of the rounds, and their ratio. Writes
+bench/results/vision_step_lazy.json.
 """
 
 import argparse
@@ -34,16 +44,18 @@ import os
 from pathlib import Path
 import re
 import signal
+import statistics
 import threading
 import time
 
-from bench_common import local_node_env, save_results
+from bench_common import CLK_TCK, cpu_ticks, local_node_env, save_results
 import ros_harness
 
 FPS = 30.0
 WIDTH, HEIGHT = 640, 480
 SETTLE_S = 2.0
 STEPS = ('circle', 'hand_signs', 'faces')
+LAZY_STEPS = ('circle', 'hand_signs')  # --lazy's: the cheapest step, and the model one
 STATS = re.compile(r'processing p50 ([\d.]+) ms p99 ([\d.]+) ms')
 
 
@@ -124,15 +136,115 @@ def measure(step, duration, threads, env):
     }
 
 
+def processed(arrays):
+    """Return the newest `processed` count of vision_step's /diagnostics, or None."""
+    for array in reversed(list(arrays)):
+        for status in array.status:
+            if status.name == 'vision_step: processing':
+                values = {kv.key: kv.value for kv in status.values}
+                return int(values['processed']), int(values.get('images published', -1))
+    return None
+
+
+def lazy_case(step, subscribed, duration, threads, env):
+    """Run camera and vision_step; return its CPU ms per processed frame, and the counts."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    domain = ros_harness.DomainId()
+    env = dict(env, ROS_DOMAIN_ID=str(domain.value))
+    camera = ros_harness.NodeProcess('usbcam_publisher', ros_harness.ros_args({
+        'video_device': 'synthetic', 'image_width': WIDTH, 'image_height': HEIGHT,
+        'framerate': FPS}), env)
+    node = ros_harness.NodeProcess('vision_step', ros_harness.ros_args(
+        {'step': step, 'threads': threads}), env)
+    peer = ros_harness.RosPeer(domain.value, name='bench_lazy')
+    try:
+        arrays = peer.collect(DiagnosticArray, '/diagnostics', QoSProfile(
+            depth=100, reliability=ReliabilityPolicy.RELIABLE))
+        if subscribed:
+            outputs = Collector(peer, 'vision_step/image')
+        ros_harness.wait_until(lambda: (processed(arrays) or (0,))[0] > 0, 90.0, 0.1,
+                               'frames processed')
+        if subscribed:
+            ros_harness.wait_until(lambda: outputs.records, 30.0, 0.05, 'the first output')
+        time.sleep(SETTLE_S)
+        # A fresh diagnostics report at each end of the window: counts and CPU together.
+        count = len(arrays)
+        ros_harness.wait_until(lambda: len(arrays) > count, 10.0, 0.01, 'a report')
+        (start_frames, start_published), start_cpu = processed(arrays), cpu_ticks(node.pid)
+        time.sleep(duration)
+        count = len(arrays)
+        ros_harness.wait_until(lambda: len(arrays) > count, 10.0, 0.01, 'a report')
+        (end_frames, end_published), end_cpu = processed(arrays), cpu_ticks(node.pid)
+    finally:
+        peer.close()
+        status = (node.stop(signal.SIGINT, 15.0), camera.stop(signal.SIGINT, 15.0))
+        log = node.output()
+        node.kill()
+        camera.kill()
+        domain.release()
+    if status != (0, 0) or 'Traceback' in log:
+        raise SystemExit('%s ended with %s:\n%s' % (node.name, status, log))
+    frames = end_frames - start_frames
+    published = end_published - start_published
+    if frames <= 0 or (published > 0) != subscribed:
+        raise SystemExit('%s, subscribed %s: %d frames processed, %d published' % (
+            step, subscribed, frames, published))
+    return {'cpu_ms_per_frame': (end_cpu - start_cpu) / CLK_TCK / frames * 1e3,
+            'processed': frames, 'published': published}
+
+
+def lazy(options, env):
+    """Measure each step with and without a subscriber of its image; print and save."""
+    steps = options.steps.split(',') if options.steps != ','.join(STEPS) else LAZY_STEPS
+    load_before = os.getloadavg()[0]
+    runs = {(step, subscribed): [] for step in steps for subscribed in (True, False)}
+    for round_ in range(options.rounds):
+        for step in steps:
+            for subscribed in (True, False):
+                case = lazy_case(step, subscribed, options.duration, options.threads, env)
+                runs[step, subscribed].append(case)
+                print('round %d, %-10s %-13s %.3f ms CPU a frame (%d frames, %d published)' % (
+                    round_ + 1, step, 'subscribed' if subscribed else 'nobody',
+                    case['cpu_ms_per_frame'], case['processed'], case['published']), flush=True)
+    load = (load_before, os.getloadavg()[0])
+    print('\n| step | vision_step/image | CPU a processed frame (median of %d) | ratio to '
+          'subscribed | saved a frame |' % options.rounds)
+    print('|---|---|---:|---:|---:|')
+    summary = []
+    for step in steps:
+        on = statistics.median(c['cpu_ms_per_frame'] for c in runs[step, True])
+        off = statistics.median(c['cpu_ms_per_frame'] for c in runs[step, False])
+        print('| %s | subscribed (reference) | %.3f ms | 1.00 | - |' % (step, on))
+        print('| %s | nobody subscribed | %.3f ms | %.2f | %.3f ms |' % (
+            step, off, off / on, on - off))
+        summary.append({'step': step, 'subscribed_cpu_ms': round(on, 4),
+                        'nobody_cpu_ms': round(off, 4), 'ratio': round(off / on, 4)})
+    print('machine load average (1 min) before and after: %.1f, %.1f on %d CPUs' % (
+        load + (os.cpu_count(),)))
+    save_results('vision_step_lazy', {
+        'camera': '%dx%d at %g fps, synthetic' % (WIDTH, HEIGHT, FPS),
+        'duration_s': options.duration, 'rounds': options.rounds, 'threads': options.threads,
+        'cpus': os.cpu_count(), 'load_average': load, 'summary': summary,
+        'runs': [dict(case, step=step, subscribed=subscribed)
+                 for (step, subscribed), cases in runs.items() for case in cases]})
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[1])
     parser.add_argument('--duration', type=float, default=10.0, help='seconds measured a step')
     parser.add_argument('--threads', type=int, default=1, help="vision_step's threads")
     parser.add_argument('--steps', default=','.join(STEPS),
                         help='steps, comma-separated (circle: cv_bridge_test, the reference)')
+    parser.add_argument('--lazy', action='store_true',
+                        help='measure vision_step with and without a subscriber of its image')
+    parser.add_argument('--rounds', type=int, default=3, help='rounds of --lazy')
     options = parser.parse_args()
     steps = options.steps.split(',')
     env = local_node_env()  # the collector joins the nodes on their transport
+    if options.lazy:
+        lazy(options, env)
+        return
 
     load_before = os.getloadavg()[0]
     cases = []

@@ -21,6 +21,10 @@ worker thread. That thread runs the processing step on whatever is in the slot w
 ready for the next one. With a step faster than its input every item is processed, in order;
 with a slower one each result describes the newest input, and the delay does not grow.
 
+Each item's arrival (the clock when it was offered) goes with it: `frame_age()`, called by
+the step, says how long ago the item it works on arrived, measured on this host whatever the
+item's own stamps say.
+
 No ROS here: the node supplies the step and reports how old each of its outputs is.
 """
 
@@ -88,6 +92,8 @@ class LatestFrameWorker(Generic[T]):
         self._clock = clock
         self._cond = threading.Condition()
         self._waiting = _EMPTY
+        self._waiting_since = 0.0   # when the waiting item was offered
+        self._arrived: Optional[float] = None  # when the item in progress was (worker thread)
         self._closed = threading.Event()
         self.frames_in = 0
         self.processed = 0
@@ -111,7 +117,17 @@ class LatestFrameWorker(Generic[T]):
             if self._waiting is not _EMPTY:
                 self.skipped += 1
             self._waiting = item
+            self._waiting_since = self._clock()
             self._cond.notify()
+
+    def frame_age(self) -> Optional[float]:
+        """
+        Return the seconds since the item being processed was offered (None between items).
+
+        For the step, on the worker thread: how old what it works on is, from its arrival.
+        """
+        arrived = self._arrived
+        return None if arrived is None else self._clock() - arrived
 
     def record_age(self, age_s: float) -> None:
         """Record how old an output was when it went out: now minus its input's capture time."""
@@ -160,6 +176,7 @@ class LatestFrameWorker(Generic[T]):
                 if self._closed.is_set():
                     return
                 item, self._waiting = self._waiting, _EMPTY
+                self._arrived = self._waiting_since
             start = self._clock()
             try:
                 self._process(item)
@@ -167,6 +184,8 @@ class LatestFrameWorker(Generic[T]):
                 # After close() the node tears down what the step uses: its failure is expected.
                 if not self._closed.is_set():
                     self._on_error(error)
+            finally:
+                self._arrived = None
             took = self._clock() - start
             del item  # a frame is large: do not hold it while waiting for the next one
             with self._cond:

@@ -19,23 +19,32 @@ Every image from usb_camera/image (or usb_camera/image/compressed with
 ``image_transport:=compressed``) is converted to an OpenCV bgr8 image with the bridge and
 handed to the step `-p step:=NAME` names (a built-in by short name, or the user's own
 `module.path:Class`; steps/loader.py finds it). What the step returns goes out on
-vision_step/image with the header the frame came with (and, while it has subscribers, as JPEG
-on vision_step/image/compressed); None publishes nothing. A message the bridge cannot convert
-is logged (at most once per ERROR_LOG_PERIOD_S) and skipped; a step that raises is logged once
-per kind of failure and period, counted and shown in /diagnostics; the node keeps going. With
-`display` set, the processed frames are also shown, like the subscriber shows its own.
+vision_step/image with the header the frame came with while that topic has subscribers (as
+JPEG on vision_step/image/compressed while that one has); None publishes nothing. What the
+step publishes itself (hand_signs' commands) goes out whoever listens. A message the bridge
+cannot convert is logged (at most once per ERROR_LOG_PERIOD_S) and skipped; a step that raises
+is logged once per kind of failure and period, counted and shown in /diagnostics, and its
+frame_failed() is called; the node keeps going. With `display` set, the processed frames are
+also shown, like the subscriber shows its own.
 
 The processing runs on a LatestFrameWorker, not in the subscription callback: a step slower
 than the camera works on the newest frame and counts the ones it skips, instead of working
 through a backlog of old frames. docs/processing.md explains it. cv_bridge_test is this node
 running the `circle` step under its own name and topic.
+
+At stop (close()), in this order: what the step publishes through its context from the worker
+thread is dropped from then on (StepPublishers); the worker is given STOP_GRACE_S to finish
+the frame under way, then abandoned (the step is never called again); the step's close()
+publishes its last messages (hand_signs: a zero command); the node waits up to
+DELIVERY_TIMEOUT_S for reliable subscribers to acknowledge them; run() destroys the node.
 """
 
 import dataclasses
 from pathlib import Path
 import threading
+import time
 import traceback
-from typing import Any, Optional, Sequence, Tuple
+from typing import Any, List, Optional, Sequence, Tuple
 
 import numpy as np
 from py_vision import dds, ros_arguments
@@ -48,10 +57,12 @@ from py_vision.params import Parameters, Spec, viewer_specs
 from py_vision.qos import publisher_qos
 from py_vision.stats import stamp_age_s, StreamStats
 from py_vision.steps import loader
-from py_vision.steps.api import ProcessesFrames, step_parameters, StepContext
+from py_vision.steps.api import DELIVERY_TIMEOUT_S, ProcessesFrames, step_parameters
+from py_vision.steps.api import StepContext, STOP_GRACE_S
 from py_vision.throttled_log import ThrottledLog
 from py_vision.transport import ImagePublisher, MAX_IMAGE, subscribe, TRANSPORTS
 from py_vision.viewer.display import Display, DISPLAYS
+from rclpy.duration import Duration
 from rclpy.node import Node
 from sensor_msgs.msg import CompressedImage
 
@@ -86,9 +97,10 @@ class ProcessingStats:
         self._lock = threading.Lock()
         self.failed = 0   # frames the step raised on
         self.empty = 0    # frames the step returned None for
+        self.published = 0  # outputs published on the image topic (it had subscribers)
 
     def add_output(self, age_s: Optional[float], width: int, height: int) -> int:
-        """Record one published frame and how old it was (None: not stamped); return how many."""
+        """Record one output (published or not) and its age (None: unstamped); return how many."""
         if age_s is not None:
             self.worker.record_age(age_s)
         with self._lock:
@@ -112,11 +124,17 @@ class ProcessingStats:
         with self._lock:
             self.empty += 1
 
+    def add_published(self) -> None:
+        """Record one output published as an image (raw, compressed or both)."""
+        with self._lock:
+            self.published += 1
+
     def snapshot(self) -> dict:
         """Return the output's rate, latency and size, with the worker's counts and times."""
         with self._lock:
             output = self._output.snapshot()
-            output.update(failed=self.failed, nothing_returned=self.empty)
+            output.update(failed=self.failed, nothing_returned=self.empty,
+                          published=self.published)
         return dict(output, **self.worker.snapshot())
 
 
@@ -140,6 +158,72 @@ def _given_step(argv: Sequence[str], node_name: str) -> str:
     return str(given) if given else STEP_SPECS[0].default
 
 
+class _StepPublisher:
+    """A publisher of the step's, as StepPublishers hands it out: publish() goes through it."""
+
+    def __init__(self, publisher, owner: 'StepPublishers'):
+        self._publisher = publisher
+        self._owner = owner
+
+    def publish(self, msg) -> None:
+        """Publish msg, unless the node is stopping and this is not its stop (then drop it)."""
+        self._owner.publish(self._publisher, msg)
+
+    def __getattr__(self, name):
+        return getattr(self._publisher, name)  # topic_name, get_subscription_count, ...
+
+
+class StepPublishers:
+    """
+    The publishers a step makes through its context: silent after stop(), but for its close().
+
+    Once stop() was called, only the thread that called it (the node's close(), which calls the
+    step's close()) publishes through them: a process() still under way, abandoned, publishes
+    nothing more (its frame's image is dropped too). One lock orders every message sent with
+    stop(), so nothing published from another thread can follow the step's last word.
+    `deliver()` waits for reliable subscribers to acknowledge what was sent.
+    """
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._stopper: Optional[threading.Thread] = None
+        self.publishers: List[Any] = []
+        self.dropped = 0
+
+    def create(self, node, msg_type, topic: str, depth: int):
+        """Create a publisher of the node (reliable, keep-last depth) for the step."""
+        publisher = node.create_publisher(msg_type, topic, depth)
+        self.publishers.append(publisher)
+        return _StepPublisher(publisher, self)
+
+    def publish(self, publisher, msg) -> bool:
+        """Publish msg on publisher; return False when it was dropped (after stop())."""
+        with self._lock:
+            if self._stopper is not None and threading.current_thread() is not self._stopper:
+                self.dropped += 1
+                return False
+            publisher.publish(msg)
+            return True
+
+    def stop(self) -> None:
+        """From now on only the calling thread publishes."""
+        with self._lock:
+            self._stopper = threading.current_thread()
+
+    def deliver(self, timeout_s: float) -> bool:
+        """Wait until reliable subscribers acknowledged everything sent; False at timeout_s."""
+        deadline = time.monotonic() + timeout_s
+        delivered = True
+        for publisher in self.publishers:
+            left = max(0.0, deadline - time.monotonic())
+            try:
+                delivered = publisher.wait_for_all_acked(
+                    Duration(nanoseconds=int(left * 1e9))) and delivered
+            except Exception:  # noqa: B902 - a publisher rclpy already let go of
+                delivered = False
+        return delivered
+
+
 class VisionStep(Node):
     """The processing node (node_main.NodeProgram): one step on the newest frame."""
 
@@ -157,6 +241,7 @@ class VisionStep(Node):
     PARAMETERS: Tuple[Spec, ...] = NODE_PARAMETERS
 
     worker = display = None  # what close() finds when start-up was interrupted
+    step_publishers: Optional[StepPublishers] = None
     step: Optional[ProcessesFrames] = None
     failed = False           # it never stops of an error of its own
     _too_large_said = False  # the warning about frames larger than the segment
@@ -189,8 +274,9 @@ class VisionStep(Node):
                                values['web_port'], self.OUTPUT_TOPIC, values['web_token'])
         # Reliable with a queue of 10, the ROS 2 default: what the seed's rospy publisher
         # gives, and both reliable and best-effort subscribers (rqt_image_view) receive it.
-        self.images = ImagePublisher(params, self.OUTPUT_TOPIC, publisher_qos(), self.bridge_,
-                                     lazy_raw=False)
+        # Raw and JPEG each only while someone subscribes: with nobody watching, a frame costs
+        # the step alone (bench/bench_vision_step.py --lazy).
+        self.images = ImagePublisher(params, self.OUTPUT_TOPIC, publisher_qos(), self.bridge_)
         self.publisher_ = self.images.raw
         # Frames can wait in three places: the subscription's DDS history, the executor
         # (which takes one message per callback) and the worker's slot. The callback only
@@ -201,9 +287,11 @@ class VisionStep(Node):
         self.stats = ProcessingStats(self.worker)
         self._failures = ThrottledLog(self.get_logger(), ERROR_LOG_PERIOD_S)
         self._last_failure = ''
+        self.step_publishers = StepPublishers()
         note = loader.start(self.step_name, self.step, StepContext(
             node=self, logger=self.get_logger(), parameters=step_values,
-            threads=values.get('threads', 1), cancelled=lambda: self.worker.closed))
+            threads=values.get('threads', 1), cancelled=lambda: self.worker.closed,
+            frame_age=self.worker.frame_age, publisher_factory=self.step_publishers.create))
         self.subscription_ = subscribe(self, 'usb_camera/image', values['image_transport'],
                                        self.worker.offer, depth=1,
                                        max_image_mb=values['max_image_mb'])
@@ -266,6 +354,7 @@ class VisionStep(Node):
         except Exception as error:  # noqa: B902 - the step's own code: log, count, go on
             if not self.worker.closed:
                 self._step_raised(error)
+                self._frame_failed(msg.header, error)
             return
         if self.worker.closed:
             return  # close() was called: the node is being torn down, drop the frame
@@ -273,7 +362,8 @@ class VisionStep(Node):
             self.stats.add_empty()
             return
         rows, cols = out.shape[:2]
-        self.images.publish(msg.header, lambda: out)
+        if any(self.images.publish(msg.header, lambda: out)):
+            self.stats.add_published()
         age = stamp_age_s(self.get_clock().now().nanoseconds, msg.header.stamp)
         if self.stats.add_output(age, cols, rows) == 1:
             self.get_logger().info('first image: %dx%d %s' % (
@@ -300,6 +390,19 @@ class VisionStep(Node):
             'step %s failed on a frame%s: %s; the frame is skipped, the node goes on '
             '(%d failed so far)' % (self.step_name, ' in %s' % where if where else '', kind,
                                     failed))
+
+    def _frame_failed(self, header, error: Exception):
+        """Tell the step (its frame_failed hook, where it has one) that it failed on a frame."""
+        hook = getattr(self.step, 'frame_failed', None)
+        if hook is None:
+            return
+        try:
+            hook(header, error)
+        except Exception as failure:  # noqa: B902 - the step's own code
+            self._failures.error(
+                ('frame_failed', type(failure).__name__),
+                'step %s failed in frame_failed(): %s: %s' % (
+                    self.step_name, type(failure).__name__, failure))
 
     def _show_newest(self):
         with self._shown_lock:
@@ -337,6 +440,7 @@ class VisionStep(Node):
                   'frames in': s['frames_in'], 'processed': s['processed'],
                   'skipped': s['skipped'], 'not converted': s['errors'],
                   'step failed': s['failed'], 'nothing returned': s['nothing_returned'],
+                  'images published': s['published'],
                   'processing p50 ms': s['processing_ms_p50'],
                   'processing p99 ms': s['processing_ms_p99'],
                   'output age p50 ms': s['age_ms_p50'], 'output age p99 ms': s['age_ms_p99'],
@@ -364,9 +468,18 @@ class VisionStep(Node):
                       values)
 
     def close(self):
-        """Stop the worker (abandoning a step in progress), the step, the window or viewer."""
-        if self.worker is not None:
-            self.worker.close()
+        """
+        Stop the worker (abandoning a step in progress), the step, the window or viewer.
+
+        The step's close() has the last word on its publishers, and what it sends there is
+        waited for (the module's docstring says in which order).
+        """
+        if self.step_publishers is not None:
+            self.step_publishers.stop()
+        if self.worker is not None and not self.worker.close(STOP_GRACE_S):
+            self.get_logger().warning(
+                'step %s still processing a frame %g s after the stop: abandoned, nothing it '
+                'publishes from now on goes out' % (self.step_name, STOP_GRACE_S))
         if self.step is not None:
             closing = getattr(self.step, 'close', None)
             if closing is not None:
@@ -375,6 +488,11 @@ class VisionStep(Node):
                 except Exception as error:  # noqa: B902 - the step's own code
                     self.get_logger().error('step %s failed to close: %s: %s' % (
                         self.step_name, type(error).__name__, error))
+        if self.step_publishers is not None and not self.step_publishers.deliver(
+                DELIVERY_TIMEOUT_S):
+            self.get_logger().warning(
+                "step %s's last messages were not acknowledged by every reliable subscriber "
+                'within %g s' % (self.step_name, DELIVERY_TIMEOUT_S))
         if self.display is not None:
             self.display.close()
 

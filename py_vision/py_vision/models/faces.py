@@ -25,7 +25,7 @@ poorly or not at all (the astronaut's face: found at 94 pixels wide in a 640-wid
 0.9; at 73 pixels, score 0.6; missed at 64).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import List
 
 import numpy as np
@@ -64,11 +64,20 @@ class FaceDetector:
         """Use a loaded face_detection_short_range model; max_faces 0 means no limit."""
         self._outputs = find_outputs(model, [(1, _SIZE, _SIZE, 3)], _OUTPUTS)
         self.model = model
-        self.min_score = min_score
         self.nms_threshold = nms_threshold
         self.max_faces = max_faces
         self._anchors = ssd_anchors(AnchorOptions(_SIZE, _SIZE, (8, 16, 16, 16)))
         self._decoding = DecodeOptions(6, _SIZE, _SIZE, _SIZE, _SIZE, min_score)
+
+    @property
+    def min_score(self) -> float:
+        """Return the score a face needs to be found (0 to 1; the anchors are decoded at it)."""
+        return self._decoding.min_score
+
+    @min_score.setter
+    def min_score(self, value: float) -> None:
+        # One assignment: a detect() under way on another thread uses the old or the new one.
+        self._decoding = replace(self._decoding, min_score=float(value))
 
     @classmethod
     def from_file(cls, path: str = '', threads: int = 1, **options) -> 'FaceDetector':

@@ -146,6 +146,15 @@ class HandTracker:
         self.track = track
         self._tracked: List[HandRegion] = []
 
+    @property
+    def min_palm_score(self) -> float:
+        """Return the palm detector's threshold: a palm scoring less is not looked at."""
+        return self.palms.min_score
+
+    @min_palm_score.setter
+    def min_palm_score(self, value: float) -> None:
+        self.palms.min_score = value
+
     @classmethod
     def from_files(cls, palm_path: str = '', landmark_path: str = '', threads: int = 1,
                    **options) -> 'HandTracker':

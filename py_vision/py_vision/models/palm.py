@@ -26,7 +26,7 @@ the middle finger's knuckle, scaled 2.6 times the palm and moved half a palm tow
 fingers (MediaPipe's palm_detection_detection_to_roi graph).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 from typing import List
 
@@ -75,6 +75,16 @@ class PalmDetector:
         self.max_palms = max_palms
         self._anchors = ssd_anchors(AnchorOptions(_SIZE, _SIZE, (8, 16, 16, 16)))
         self._decoding = DecodeOptions(7, _SIZE, _SIZE, _SIZE, _SIZE, min_score)
+
+    @property
+    def min_score(self) -> float:
+        """Return the score a palm needs to be found (0 to 1; the anchors are decoded at it)."""
+        return self._decoding.min_score
+
+    @min_score.setter
+    def min_score(self, value: float) -> None:
+        # One assignment: a detect() under way on another thread uses the old or the new one.
+        self._decoding = replace(self._decoding, min_score=float(value))
 
     def detect(self, image_bgr: np.ndarray) -> List[Palm]:
         """Return the palms in the frame, best score first."""

@@ -24,15 +24,23 @@ nothing for this frame. Everything else is optional; the base class `Step` gives
   choices, `live` when they may change while it runs). The node declares them beside its own,
   so `--help`, `ros2 param describe` and `ros2 param set` show and take them like the node's.
 - start(context): called once, before the first frame, with a StepContext: the node (to
-  create publishers), the logger, the parameters' start-up values, `threads`, the shipped
-  models' paths. A step loads its models here. It returns nothing, or a short note for the
-  node's start-up line (say, the runtime and model files).
+  create publishers and timers), the logger, the parameters' start-up values, `threads`, the
+  shipped models' paths, and `frame_age()`. A step loads its models here. It returns nothing,
+  or a short note for the node's start-up line (say, the runtime and model files).
 - parameters_changed(changes): a live parameter was set (name -> checked value); return None to
   accept, or why the change is refused.
-- close(): the node is stopping.
+- frame_failed(header, error): process() raised on this frame (or returned something that is
+  not a bgr8 image or None). Called on the worker thread, right after; a step that drives
+  something stops it here (hand_signs sends a zero command).
+- close(): the node is stopping. By then process() is never called again: the one under way
+  has returned, or (after STOP_GRACE_S) it is abandoned, and nothing it publishes any more
+  through the context's publishers goes out. What close() publishes through them is the
+  step's last word: the node then waits (up to DELIVERY_TIMEOUT_S) until every reliable
+  subscriber has acknowledged it, before its publishers are destroyed.
 
-process() runs on the node's worker thread, one frame at a time; the other hooks run on the
-executor's. A process() that raises is logged and counted, and the next frame is tried.
+process() runs on the node's worker thread, one frame at a time; the other hooks and the
+timers (StepContext.create_timer) run on the executor's. A process() that raises is logged
+and counted, frame_failed() is called, and the next frame is tried.
 """
 
 from dataclasses import dataclass
@@ -41,7 +49,7 @@ from typing import Any, Callable, ClassVar, Dict, Optional, Protocol, Sequence, 
 import numpy as np
 from py_vision.params import Spec
 
-__all__ = ['ProcessesFrames', 'Step', 'StepContext']
+__all__ = ['DELIVERY_TIMEOUT_S', 'ProcessesFrames', 'Step', 'StepContext', 'STOP_GRACE_S']
 
 
 class ProcessesFrames(Protocol):
@@ -58,9 +66,29 @@ def shipped_model_path(name: str) -> str:
     return shipped_model(name)
 
 
+# How long the node waits at stop for process() to return before it abandons it, and then for
+# reliable subscribers to acknowledge what the step published last (vision_step.close()).
+STOP_GRACE_S = 1.0
+DELIVERY_TIMEOUT_S = 1.0
+
+
+def _no_age() -> Optional[float]:
+    return None
+
+
+def _own_publisher(node, msg_type, topic: str, depth: int):
+    return node.create_publisher(msg_type, topic, depth)
+
+
 @dataclass
 class StepContext:
-    """What a step is given once, at start: the node and what it knows."""
+    """
+    What a step is given once, at start: the node and what it knows.
+
+    frame_age(), called from process(), returns the seconds since the frame being processed
+    arrived on this host (from its arrival, not its header's stamp: the camera may be another
+    machine with another clock), or None where that is not known.
+    """
 
     node: Any                          # the rclpy Node running the step
     logger: Any                        # the node's logger
@@ -68,10 +96,25 @@ class StepContext:
     threads: int = 1                   # the CPU threads a model may use
     cancelled: Callable[[], bool] = lambda: False  # True once the node is stopping
     model_path: Callable[[str], str] = shipped_model_path  # a shipped model's path
+    frame_age: Callable[[], Optional[float]] = _no_age  # see above
+    # How the node makes the step's publishers (vision_step: ones whose messages from an
+    # abandoned process() are dropped, and whose last messages are waited for at stop).
+    publisher_factory: Callable[..., Any] = _own_publisher
 
     def create_publisher(self, msg_type, topic: str, depth: int = 10):
         """Create a publisher of the node (reliable, keep-last depth)."""
-        return self.node.create_publisher(msg_type, topic, depth)
+        return self.publisher_factory(self.node, msg_type, topic, depth)
+
+    def create_timer(self, period_s: float, callback: Callable[[], None]):
+        """
+        Call callback every period_s seconds of steady time, on the executor's thread.
+
+        Steady: a simulated or adjusted ROS clock does not change it. What the callback shares
+        with process() (another thread) needs a lock.
+        """
+        from rclpy.clock import Clock, ClockType  # a step made without ROS never gets here
+        return self.node.create_timer(period_s, callback,
+                                      clock=Clock(clock_type=ClockType.STEADY_TIME))
 
 
 class Step:
@@ -91,8 +134,11 @@ class Step:
         """Take changed live parameters (name -> value); return None, or why they are refused."""
         return None
 
+    def frame_failed(self, header: Any, error: Exception) -> None:
+        """React to process() failing on the frame with this header (worker thread)."""
+
     def close(self) -> None:
-        """Release what the step holds; the node is stopping."""
+        """Release what the step holds, publish its last messages; the node is stopping."""
 
 
 def step_parameters(step_class: type) -> Tuple[Spec, ...]:

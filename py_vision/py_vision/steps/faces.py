@@ -93,8 +93,8 @@ class Faces(Step):
     """Faces found, boxed, and published as detections."""
 
     PARAMETERS = (
-        Spec('min_score', 0.5, 'faces scoring less than this are left out', (0.0, 1.0),
-             live=True),
+        Spec('min_score', 0.5, 'faces scoring less than this are left out (the detector '
+             'decodes at it, down to 0)', (0.0, 1.0), live=True),
         Spec('detections_topic', 'detections', 'where the detections go (vision_msgs); '
              'without vision_msgs, JSON on this name + _json', check=bool,
              accepted='a topic name'),
@@ -102,15 +102,15 @@ class Faces(Step):
 
     def __init__(self):
         self.detector: Optional[FaceDetector] = None
-        self.min_score = 0.5
         self.publisher = None
         self.message: Callable[[Any, List[Face]], Any] = json_message
 
     def start(self, context: StepContext) -> Optional[str]:
         """Load the model; publish vision_msgs where installed, else the JSON fallback."""
-        self.min_score = context.parameters['min_score']
+        # The detector decodes at min_score: below MediaPipe's 0.5 too, down to 0.
         self.detector = FaceDetector.from_file(context.model_path(FACE_MODEL),
-                                               threads=context.threads)
+                                               threads=context.threads,
+                                               min_score=context.parameters['min_score'])
         topic = context.parameters['detections_topic']
         found = vision_msgs_publisher(context, topic)
         if found is None:
@@ -123,13 +123,13 @@ class Faces(Step):
         return '%s; %s; %s' % (self.detector.model.runtime, FACE_MODEL, what)
 
     def parameters_changed(self, changes: Dict[str, Any]) -> Optional[str]:
-        """Take a new min_score."""
-        self.min_score = changes['min_score']
+        """Take a new min_score (the detector's threshold from the next frame on)."""
+        self.detector.min_score = changes['min_score']
         return None
 
     def process(self, image: np.ndarray, header: Any) -> Optional[np.ndarray]:
         """Detect, publish the detections with the frame's header, draw the boxes."""
-        faces = [face for face in self.detector.detect(image) if face.score >= self.min_score]
+        faces = self.detector.detect(image)
         self.publisher.publish(self.message(header, faces))
         for face in faces:
             x, y, w, h = (int(round(float(v))) for v in face.box)

@@ -282,3 +282,41 @@ def test_a_step_that_raises_is_logged_counted_and_the_node_goes_on(launch, peer,
     probe.result_for(2)
     assert node.stop(signal.SIGINT) == 0
     assert 'Traceback' not in node.output()
+
+
+def processing_values(arrays):
+    """Return the newest processing status' values of vision_step, or {}."""
+    for array in reversed(list(arrays)):
+        for status in array.status:
+            if status.name == 'vision_step: processing':
+                return {kv.key: kv.value for kv in status.values}
+    return {}
+
+
+def test_the_image_goes_out_only_while_someone_subscribes(launch, peer):
+    arrays = peer.collect(DiagnosticArray, '/diagnostics', RELIABLE)
+    node = launch('vision_step')  # circle
+    publisher = peer.node.create_publisher(Image, 'usb_camera/image', RELIABLE)
+    image = np.zeros((90, 120, 3), np.uint8)
+    sent = [0]
+
+    def send_until(condition, what):
+        def sent_one():
+            if condition():
+                return True
+            sent[0] += 1
+            publisher.publish(image_msg(image, sent[0], 'cam'))
+            return False
+        wait_until(sent_one, 60.0, interval=0.1, what=what)
+    # Nobody subscribes to vision_step/image: the frames are processed, none is published.
+    send_until(lambda: int(processing_values(arrays).get('processed', 0)) >= 5,
+               'five processed frames')
+    assert processing_values(arrays)['images published'] == '0'
+    # A subscriber arriving late gets frames, and the node counts them.
+    received = peer.collect(Image, OUTPUT, RELIABLE)
+    send_until(lambda: received, 'an image for the late subscriber')
+    assert as_bgr(received[0])[60, 60].tolist() == [0, 0, 255]  # the circle's red
+    assert received[0].header.frame_id == 'cam'
+    send_until(lambda: int(processing_values(arrays).get('images published', 0)) >= 1,
+               'the count of images published')
+    assert node.stop(signal.SIGINT) == 0

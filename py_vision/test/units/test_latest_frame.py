@@ -177,3 +177,29 @@ def test_close_does_not_wait_forever_for_a_step_that_ignores_it_nor_report_its_f
     wait_until(lambda: worker.processed == 1, TIMEOUT, what='the held step to end')
     assert errors == []
     assert worker.close(timeout=TIMEOUT)
+
+
+def test_frame_age_is_counted_from_the_items_arrival_while_it_is_processed(closing):
+    # The item waits in the slot while the one before it is processed: its age, read by the
+    # step, includes that wait (not the item's own stamps: it has none here).
+    clock = FakeClock()
+    ages = []
+    hold = Recorder()
+    worker = None
+
+    def step(item):
+        hold(item)
+        ages.append((item, worker.frame_age()))
+    worker = LatestFrameWorker(step, clock=clock)
+    closing(worker)
+    assert worker.frame_age() is None  # between items
+    hold.release.clear()
+    worker.offer('first')
+    assert hold.started.wait(TIMEOUT)
+    clock.t += 0.2
+    worker.offer('second')  # arrives 0.2 s after the first
+    clock.t += 0.3
+    hold.release.set()
+    wait_until(lambda: len(ages) == 2, TIMEOUT, what='both items')
+    assert ages == [('first', pytest.approx(0.5)), ('second', pytest.approx(0.3))]
+    wait_until(lambda: worker.frame_age() is None, TIMEOUT, what='no item in progress')

@@ -12,19 +12,35 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The step loader's names and errors, and hand_signs' signs and Twists, without ROS graphs."""
+"""
+The step loader, and the built-in model steps without a ROS graph.
 
-from hand_poses import thumb_up
+hand_signs with a stand-in tracker (landmarks written by hand, hand_poses): each sign's Twist,
+the hold before a sign moves the robot, the zero commands of the watchdog (a fake clock), of a
+failure, of a stale frame and of the stop, TwistStamped; with its real models on photographs,
+min_score below 0.5 letting through a palm (or a hand) scoring between it and 0.5. faces with a
+model double whose scores are lowered: min_score below 0.5 letting through a face scoring less.
+"""
+
+import json
+import threading
+
+from builtin_interfaces.msg import Time
+from fake_clock import FakeClock
+from geometry_msgs.msg import Twist, TwistStamped
+from hand_poses import FOLDED, place, pose, THUMB_ACROSS, thumb_up
 import numpy as np
+from photos import hand_photo, photo
 from py_vision.models.hands import Hand
 from py_vision.params import Spec
 from py_vision.steps import loader
 from py_vision.steps.api import StepContext
 from py_vision.steps.circle import Circle
+from py_vision.steps.faces import Faces
 from py_vision.steps.hand_signs import HandSigns, MAX_ANGULAR, MAX_LINEAR, motion
-from py_vision.vision_step import VisionStep
+from py_vision.vision_step import StepPublishers, VisionStep
 import pytest
-from std_msgs.msg import Header
+from std_msgs.msg import Header, String
 
 
 def test_built_in_steps_are_found_by_their_short_names():
@@ -84,14 +100,31 @@ class FakePublisher:
 
 
 class FakeNode:
-    """The node a step creates its publishers through."""
+    """The node a step creates its publishers and timers through; its clock says NOW."""
+
+    NOW = Time(sec=1700000000, nanosec=5)
 
     def __init__(self):
         self.publishers = {}
+        self.timers = []
 
     def create_publisher(self, msg_type, topic, depth):
         self.publishers[topic] = FakePublisher(msg_type, topic)
         return self.publishers[topic]
+
+    def create_timer(self, period, callback, clock=None):
+        self.timers.append((period, callback))
+
+    def get_clock(self):
+        node = self
+
+        class Clock:
+            def now(self):
+                class Now:
+                    def to_msg(self):
+                        return node.NOW
+                return Now()
+        return Clock()
 
 
 class FakeTracker:
@@ -103,34 +136,232 @@ class FakeTracker:
         return list(self.hands)
 
 
-def test_hand_signs_publishes_the_sign_and_its_twist_and_zero_below_min_score():
-    node = FakeNode()
-    step = HandSigns()
-    values = {spec.name: spec.default for spec in HandSigns.PARAMETERS}
-    note = step.start(StepContext(node=node, logger=None, parameters=dict(
-        values, linear_speed=1.5)))
-    assert 'palm_detection_lite.tflite and hand_landmark_lite.tflite' in note, note
-    assert 'Twist on /turtle1/cmd_vel' in note
-    signs, twists = node.publishers['hand_sign'], node.publishers['/turtle1/cmd_vel']
-    step.tracker = FakeTracker()
-    image = np.zeros((480, 640, 3), np.uint8)
-    header = Header(frame_id='camera')
+THUMB_UP = Hand(thumb_up(), 'right', 0.9)
+FIST = Hand(place(pose((FOLDED,) * 4, THUMB_ACROSS)), 'right', 0.9)
 
-    def run(hands):
-        step.tracker.hands = hands
-        out = step.process(image.copy(), header)
-        twist = twists.sent[-1]
-        return signs.sent[-1].data, (twist.linear.x, twist.angular.z), out
+
+def defaults(step_class, **changes):
+    return dict({spec.name: spec.default for spec in step_class.PARAMETERS}, **changes)
+
+
+class SignsUnderTest:
+    """A HandSigns started on a FakeNode with a stand-in tracker, and what it published."""
+
+    def __init__(self, frame_age=lambda: 0.01, **parameters):
+        self.node = FakeNode()
+        self.step = HandSigns()
+        self.age = frame_age
+        self.note = self.step.start(StepContext(
+            node=self.node, logger=None, parameters=defaults(HandSigns, **parameters),
+            frame_age=lambda: self.age()))
+        self.step.tracker = FakeTracker()
+        self.signs = self.node.publishers['hand_sign']
+        self.twists = self.node.publishers[self.step.settings['cmd_vel_topic']]
+        self.image = np.zeros((480, 640, 3), np.uint8)
+
+    def frame(self, hands, frame_id='camera'):
+        """Process one frame showing hands; return (sign, (forward, turn) sent, image)."""
+        self.step.tracker.hands = hands
+        sent = len(self.twists.sent)
+        out = self.step.process(self.image.copy(), Header(frame_id=frame_id))
+        assert len(self.twists.sent) == sent + 1, 'one command a frame'
+        return self.signs.sent[-1].data, speeds(self.twists.sent[-1]), out
+
+    def commands(self):
+        return [speeds(msg) for msg in self.twists.sent]
+
+
+def speeds(msg):
+    twist = msg.twist if isinstance(msg, TwistStamped) else msg
+    return twist.linear.x, twist.angular.z
+
+
+def test_hand_signs_publishes_the_sign_and_its_twist_and_zero_below_min_score():
+    test = SignsUnderTest(linear_speed=1.5, hold_frames=1)
+    assert 'palm_detection_lite.tflite and hand_landmark_lite.tflite' in test.note, test.note
+    assert 'Twist on /turtle1/cmd_vel' in test.note
     # A thumbs-up: forward at linear_speed, the landmarks and the sign drawn.
-    sign, speeds, out = run([Hand(thumb_up(), 'right', 0.9)])
-    assert (sign, speeds) == ('thumb_up', (1.5, 0.0))
+    sign, moving, out = test.frame([THUMB_UP])
+    assert (sign, moving) == ('thumb_up', (1.5, 0.0))
     assert (out != 0).any(axis=2).sum() > 500
     # The same hand scoring below min_score, or no hand: no_hand and a zero Twist.
-    assert run([Hand(thumb_up(), 'right', 0.3)])[:2] == ('no_hand', (0.0, 0.0))
-    assert run([])[:2] == ('no_hand', (0.0, 0.0))
-    # A lower min_score, set live, lets it through; stopping sends a last zero Twist.
-    assert step.parameters_changed({'min_score': 0.2}) is None
-    assert run([Hand(thumb_up(), 'right', 0.3)])[:2] == ('thumb_up', (1.5, 0.0))
-    step.close()
-    assert (twists.sent[-1].linear.x, twists.sent[-1].angular.z) == (0.0, 0.0)
-    assert len(signs.sent) == 4 and len(twists.sent) == 5
+    assert test.frame([Hand(thumb_up(), 'right', 0.3)])[:2] == ('no_hand', (0.0, 0.0))
+    assert test.frame([])[:2] == ('no_hand', (0.0, 0.0))
+    # A lower min_score, set live, lets it through (and reaches the tracker's thresholds).
+    tracker = test.step.tracker
+    tracker.min_hand_score = tracker.min_palm_score = 0.5
+    assert test.step.parameters_changed({'min_score': 0.2}) is None
+    assert (tracker.min_hand_score, tracker.min_palm_score) == (0.2, 0.2)
+    assert test.frame([Hand(thumb_up(), 'right', 0.3)])[:2] == ('thumb_up', (1.5, 0.0))
+    # Above 0.5 the palm detector keeps MediaPipe's 0.5; the hand's score must reach it.
+    test.step.parameters_changed({'min_score': 0.8})
+    assert (tracker.min_hand_score, tracker.min_palm_score) == (0.8, 0.5)
+    assert isinstance(test.twists.sent[0], Twist)
+
+
+def test_hand_signs_moves_only_on_a_held_sign_and_a_flicker_stops_it():
+    test = SignsUnderTest()  # hold_frames 3
+    seen = [test.frame(hands)[:2] for hands in [[THUMB_UP]] * 4 + [[FIST]] + [[THUMB_UP]] * 3]
+    assert [sign for sign, _ in seen] == ['thumb_up'] * 4 + ['fist'] + ['thumb_up'] * 3
+    assert [moving for _, moving in seen] == [(0.0, 0.0)] * 2 + [(1.0, 0.0)] * 2 + [
+        (0.0, 0.0)] * 3 + [(1.0, 0.0)]
+    # No hand stops it at once; hold_frames is live.
+    assert test.frame([])[1] == (0.0, 0.0)
+    test.step.parameters_changed({'hold_frames': 1})
+    assert test.frame([FIST])[1] == (-1.0, 0.0)
+
+
+def test_hand_signs_watchdog_failure_stale_frame_and_stop_each_send_one_zero():
+    age = [0.01]
+    test = SignsUnderTest(frame_age=lambda: age[0], hold_frames=1, command_timeout=0.5,
+                          max_frame_age=0.3)
+    clock = test.step.gate.clock = FakeClock()
+    # The watchdog's timer: a few times per command_timeout, calling the gate's check.
+    [(period, check)] = test.node.timers
+    assert period == pytest.approx(0.1)
+    assert test.frame([THUMB_UP])[1] == (1.0, 0.0)
+    clock.t += 0.3
+    check()
+    assert test.commands() == [(1.0, 0.0)]
+    clock.t += 0.3  # no frame for 0.6 s: one zero, then nothing
+    check()
+    check()
+    assert test.commands() == [(1.0, 0.0), (0.0, 0.0)]
+    # The step failing on a frame (the node calls frame_failed): one zero.
+    test.frame([THUMB_UP])
+    test.step.frame_failed(Header(), RuntimeError('the model failed'))
+    test.step.frame_failed(Header(), RuntimeError('the model failed'))
+    assert test.commands()[2:] == [(1.0, 0.0), (0.0, 0.0)]
+    # A frame that waited 0.4 s before its command: a zero, not its fist; the sign still out.
+    test.frame([THUMB_UP])
+    age[0] = 0.4
+    test.step.tracker.hands = [FIST]
+    test.step.process(test.image.copy(), Header(frame_id='camera'))
+    assert test.signs.sent[-1].data == 'fist'
+    assert test.commands()[4:] == [(1.0, 0.0), (0.0, 0.0)]
+    # The stop: a last zero, and a frame still being processed sends nothing after it.
+    age[0] = 0.01
+    test.frame([THUMB_UP])
+    test.step.close()
+    test.step.tracker.hands = [THUMB_UP]
+    test.step.process(test.image.copy(), Header(frame_id='camera'))
+    assert test.commands()[6:] == [(1.0, 0.0), (0.0, 0.0)]
+
+
+def test_hand_signs_stamped_commands_carry_the_frames_header_and_the_zeros_now():
+    test = SignsUnderTest(cmd_vel_stamped=True, hold_frames=1)
+    assert 'TwistStamped on /turtle1/cmd_vel' in test.note, test.note
+    header = Header(frame_id='front_camera', stamp=Time(sec=12, nanosec=34))
+    test.step.tracker.hands = [THUMB_UP]
+    test.step.process(test.image.copy(), header)
+    test.step.close()
+    moving, zero = test.twists.sent
+    assert isinstance(moving, TwistStamped) and speeds(moving) == (1.0, 0.0)
+    assert moving.header == header
+    assert speeds(zero) == (0.0, 0.0)
+    assert zero.header == Header(frame_id='front_camera', stamp=FakeNode.NOW)
+
+
+# min_score below 0.5 with the real models, on photographs whose scores are known (LiteRT and
+# tflite_runtime agree on them to far better than the margins): the hand photograph at a
+# quarter of its brightness has its best palm at 0.41 (its hand, once found, at 0.98); the
+# horse's leg the palm detector takes for a palm (0.63) is a hand at 0.004 (test_hands).
+DARK_HAND_BRIGHTNESS = 0.25
+
+
+def real_hand_signs(min_score):
+    node = FakeNode()
+    step = HandSigns()
+    step.start(StepContext(node=node, logger=None, parameters=defaults(
+        HandSigns, min_score=min_score)))
+    return step, node.publishers['hand_sign']
+
+
+def sign_of(step, signs, image):
+    step.tracker.forget()
+    step.process(image.copy(), Header())
+    return signs.sent[-1].data
+
+
+def test_hand_signs_min_score_below_half_finds_a_palm_and_a_hand_scoring_less_than_half():
+    dark = (hand_photo().astype(np.float32) * DARK_HAND_BRIGHTNESS).astype(np.uint8)
+    horse = photo('horse.png')
+    step, signs = real_hand_signs(0.5)
+    assert sign_of(step, signs, dark) == 'no_hand'
+    assert sign_of(step, signs, horse) == 'no_hand'
+    step.parameters_changed({'min_score': 0.3})
+    assert sign_of(step, signs, dark) == 'open_hand'
+    assert sign_of(step, signs, horse) == 'no_hand'
+    step.parameters_changed({'min_score': 0.001})
+    assert sign_of(step, signs, horse) != 'no_hand'
+    # Started with it, too.
+    step, signs = real_hand_signs(0.3)
+    assert sign_of(step, signs, dark) == 'open_hand'
+
+
+class LoweredScores:
+    """A face model whose raw scores (the (1, N, 1) output) are `by` logits lower."""
+
+    def __init__(self, model, by):
+        self.model, self.by = model, by
+
+    def __getattr__(self, name):
+        return getattr(self.model, name)
+
+    def run(self, *arrays):
+        return [out - self.by if out.shape[-1] == 1 else out for out in self.model.run(*arrays)]
+
+
+def face_scores(msg):
+    if isinstance(msg, String):
+        return [item['score'] for item in json.loads(msg.data)['detections']]
+    return [detection.results[0].hypothesis.score for detection in msg.detections]
+
+
+def test_faces_min_score_below_half_finds_a_face_scoring_less_than_half():
+    node = FakeNode()
+    step = Faces()
+    step.start(StepContext(node=node, logger=None, parameters=defaults(Faces, min_score=0.1)))
+    [publisher] = node.publishers.values()
+    # The astronaut's face scores 0.92 (logit 2.4); 3.5 logits lower it scores about 0.25.
+    step.detector.model = LoweredScores(step.detector.model, 3.5)
+    astronaut = photo('astronaut.png')
+    step.process(astronaut.copy(), Header())
+    [score] = face_scores(publisher.sent[-1])
+    assert 0.1 <= score < 0.5
+    step.parameters_changed({'min_score': 0.5})
+    step.process(astronaut.copy(), Header())
+    assert face_scores(publisher.sent[-1]) == []
+
+
+class AckedPublisher(FakePublisher):
+    """A FakePublisher that says how long it was given to be acknowledged."""
+
+    def __init__(self, msg_type, topic):
+        super().__init__(msg_type, topic)
+        self.waited = []
+
+    def wait_for_all_acked(self, timeout):
+        self.waited.append(timeout.nanoseconds / 1e9)
+        return True
+
+
+def test_after_the_stop_only_the_stopping_thread_publishes_through_the_steps_publishers():
+    node = FakeNode()
+    node.create_publisher = lambda msg_type, topic, depth: AckedPublisher(msg_type, topic)
+    owner = StepPublishers()
+    publisher = owner.create(node, String, 'said', 10)
+    assert publisher.topic_name == 'said'  # the rest is the real publisher's
+
+    def from_the_worker(text):
+        worker = threading.Thread(target=publisher.publish, args=(String(data=text),))
+        worker.start()
+        worker.join(10)
+    from_the_worker('before the stop')
+    owner.stop()
+    from_the_worker('from an abandoned process()')  # dropped
+    publisher.publish(String(data="the step's last word"))  # the stopping thread: sent
+    assert [m.data for m in owner.publishers[0].sent] == [
+        'before the stop', "the step's last word"]
+    assert owner.dropped == 1
+    assert owner.deliver(1.0) and 0 < owner.publishers[0].waited[0] <= 1.0
