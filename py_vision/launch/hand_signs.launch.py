@@ -26,7 +26,8 @@ installed (the PetaLinux fragments install it on the boards) and there is a disp
 its window on (DISPLAY, WAYLAND_DISPLAY or a QT_QPA_PLATFORM of your choice); otherwise one
 line says why not, and the rest runs. The camera's arguments are camera.launch.py's, except
 that on an ARM board framerate, and on one of two cores the size, have defaults of their own
-(board_defaults, below); threads sets vision_step's; display, web_host, web_port and
+(board_defaults, below); threads, command_timeout and max_frame_age set vision_step's (the
+last two with defaults of their own on an ARM board); display, web_host, web_port and
 web_token set the viewer's parameters of those names (empty: the value in params_file).
 docs/processing.md has the signs and their motions, docs/boards.md what the pipeline costs on
 the boards and why these defaults.
@@ -51,6 +52,11 @@ from launch_ros.substitutions import FindPackageShare
 # 640x480 leaves nothing of the board, 320x240 some (the models see the same either way).
 BOARD_FRAMERATE = '5.0'
 TWO_CORE_SIZE = {'image_width': '320', 'image_height': '240'}
+# The command path's timings there: a processed frame every 0.25 to 0.8 s, and a command
+# decided up to two processing times after its frame arrived (it waits for the frame before
+# it, then is processed itself). The step's own 0.5 s would stop the robot between frames or
+# for a frame not yet old: 1.5 s keeps the watchdog for a lost camera and stale frames.
+BOARD_COMMAND_S = '1.5'
 ARM_MACHINES = ('aarch64', 'arm64', 'armv7l', 'armv8l')
 # The camera's arguments with a default of this launch's own: name -> meaning.
 BOARD_ARGUMENTS = {
@@ -69,6 +75,10 @@ DISPLAY_VARIABLES = ('DISPLAY', 'WAYLAND_DISPLAY', 'QT_QPA_PLATFORM')
 STEP_ARGUMENTS = {
     'threads': (int, 'CPU threads of the hand and palm models; 1 keeps the step from waiting '
                      'on cores the camera and the viewer hold'),
+    'command_timeout': (float, 'seconds without a processed frame after which one zero command '
+                               'goes out (%s on an ARM board)' % BOARD_COMMAND_S),
+    'max_frame_age': (float, 'seconds since a frame arrived after which it stops the robot '
+                             'instead of steering it (%s on an ARM board)' % BOARD_COMMAND_S),
 }
 
 # The viewer parameters that are launch arguments: name -> (type the node takes, meaning).
@@ -84,15 +94,17 @@ VIEWER_ARGUMENTS = {
 
 def board_defaults():
     """
-    Return the camera arguments this launch gives by default on this machine: none on a PC.
+    Return the arguments this launch gives by default on this machine: none on a PC.
 
     On an ARM machine (the boards: Cortex-A53s) the camera runs at BOARD_FRAMERATE, and with
-    two cores or fewer (the ZUBoard 1CG) at 320x240 too. Elsewhere (a PC, whose step keeps up
-    with the camera) the values in params_file.
+    two cores or fewer (the ZUBoard 1CG) at 320x240 too; the step's command_timeout and
+    max_frame_age are BOARD_COMMAND_S. Elsewhere (a PC, whose step keeps up with the camera)
+    the values in params_file.
     """
     if platform.machine().lower() not in ARM_MACHINES:
         return {}
-    defaults = {'framerate': BOARD_FRAMERATE}
+    defaults = {'framerate': BOARD_FRAMERATE, 'command_timeout': BOARD_COMMAND_S,
+                'max_frame_age': BOARD_COMMAND_S}
     if (os.cpu_count() or 1) <= 2:
         defaults.update(TWO_CORE_SIZE)
     return defaults
@@ -146,7 +158,7 @@ def generate_launch_description():
         *[DeclareLaunchArgument(name, default_value=board_defaults().get(name, ''),
                                 description=meaning)
           for name, meaning in BOARD_ARGUMENTS.items()],
-        *[DeclareLaunchArgument(name, default_value='',
+        *[DeclareLaunchArgument(name, default_value=board_defaults().get(name, ''),
                                 description='%s (empty: the value in params_file)' % meaning)
           for name, (_, meaning) in list(STEP_ARGUMENTS.items()) + list(
               VIEWER_ARGUMENTS.items())],

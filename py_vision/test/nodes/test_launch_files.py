@@ -58,8 +58,8 @@ PROMISED = {
     'camera.launch.py': CAMERA_ARGUMENTS,
     'pipeline.launch.py': CAMERA_ARGUMENTS | {'display', 'web_host', 'web_port', 'web_token'},
     'two_cameras.launch.py': CAMERA_ARGUMENTS | {'front_device', 'rear_device'},
-    'hand_signs.launch.py': CAMERA_ARGUMENTS | {'threads', 'display', 'web_host', 'web_port',
-                                                'web_token'},
+    'hand_signs.launch.py': CAMERA_ARGUMENTS | {'threads', 'command_timeout', 'max_frame_age',
+                                                'display', 'web_host', 'web_port', 'web_token'},
 }
 TOKEN = 'launch-test-token-0123456789'
 # Generous: Humble's launch, three nodes and their DDS discovery on a loaded 2-core machine.
@@ -305,13 +305,14 @@ def test_hand_signs_starts_turtlesim_only_where_it_has_a_display(
 
 
 @needs_launch
-@pytest.mark.parametrize('machine, given, camera', [
-    ('aarch64/2', {}, (320, 240, 5.0)),                   # ZUBoard 1CG: two Cortex-A53s
-    ('aarch64/4', {'framerate': 12}, (640, 480, 12.0)),   # four: the size of params_file;
-    ('x86_64/2', {'threads': 2}, (640, 480, 10.0)),       # an argument wins; a PC: params_file
+@pytest.mark.parametrize('machine, given, camera, command', [
+    ('aarch64/2', {}, (320, 240, 5.0), (1.5, 1.5)),       # ZUBoard 1CG: two Cortex-A53s
+    ('aarch64/4', {'framerate': 12, 'max_frame_age': 0.8},  # four: the size of params_file;
+     (640, 480, 12.0), (1.5, 0.8)),                       # an argument wins
+    ('x86_64/2', {'threads': 2}, (640, 480, 10.0), (0.5, 0.5)),  # a PC: params_file
 ])
-def test_hand_signs_camera_on_a_board_and_on_a_pc_and_threads_reach_the_step(
-        ros2_launch, peer, machine, given, camera):
+def test_hand_signs_camera_on_a_board_and_on_a_pc_and_step_arguments_reach_the_step(
+        ros2_launch, peer, machine, given, camera, command):
     twists = peer.collect(Twist, '/turtle1/cmd_vel')
     proc = ros2_launch('hand_signs.launch.py', machine=machine, video_device='synthetic',
                        display='none', **given)
@@ -319,8 +320,10 @@ def test_hand_signs_camera_on_a_board_and_on_a_pc_and_threads_reach_the_step(
                          START_S)
     assert parameters(peer, 'usbcam_publisher', ['image_width', 'image_height', 'framerate']) \
         == dict(zip(('image_width', 'image_height', 'framerate'), camera))
-    assert parameters(peer, 'vision_step', ['step', 'threads']) == {
-        'step': 'hand_signs', 'threads': given.get('threads', 1)}
+    assert parameters(peer, 'vision_step', ['step', 'threads', 'command_timeout',
+                                            'max_frame_age']) == {
+        'step': 'hand_signs', 'threads': given.get('threads', 1),
+        'command_timeout': command[0], 'max_frame_age': command[1]}
     wait_until(lambda: len(twists) >= 3, START_S, what='Twists from the step')
 
 
