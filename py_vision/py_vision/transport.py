@@ -99,8 +99,8 @@ class ImagePublisher:
     """
     Raw and compressed publishers of one base topic, each used only while it has readers.
 
-    With lazy_raw False the raw image is published whatever its subscribers (a processing
-    node's output, which a subscriber still being discovered must not miss).
+    With lazy_raw False the raw image is published whatever its subscribers (a benchmark's
+    stream, whose cost must not depend on who listens).
     """
 
     def __init__(self, parameters: Parameters, base_topic: str, qos, bridge,

@@ -17,8 +17,8 @@
 Model runtimes: load a model file and run it, whichever runtime is installed.
 
 `load(path)` picks the runtime by the file's extension: `.tflite` through LiteRT
-(`ai_edge_litert`, pip install ai-edge-litert on a PC) or `tflite_runtime` (what an aarch64
-board can pip-install for Python 3.10); `.onnx` through onnxruntime where installed, else
+(`ai_edge_litert`, pip install ai-edge-litert on a PC) or `tflite_runtime` (on the boards: the
+image's python3-tflite-runtime, which petalinux/enable_ros.py adds); `.onnx` through onnxruntime where installed, else
 OpenCV's DNN module (the boards' OpenCV 4.6 has it). Every runtime is optional: a missing one
 is a `RuntimeMissing` naming the package to install. A file that is missing, empty, truncated
 or not a model is a `ModelError` whose one-line message names the file and what is wrong.
@@ -130,8 +130,8 @@ _PACKAGES = {
 }
 
 _NONE_INSTALLED = {
-    '.tflite': 'no TensorFlow Lite runtime: pip install ai-edge-litert (PC) or tflite-runtime '
-               '(aarch64 board)',
+    '.tflite': 'no TensorFlow Lite runtime: pip install ai-edge-litert (PC), or on a board '
+               "the image's python3-tflite-runtime (petalinux/enable_ros.py)",
     '.onnx': 'no ONNX runtime: pip install onnxruntime, or install OpenCV with its DNN module',
 }
 

@@ -222,8 +222,9 @@ def test_no_tflite_runtime_at_all_names_both_packages(monkeypatch):
         monkeypatch.setitem(sys.modules, module + '.interpreter', None)
     with pytest.raises(RuntimeMissing) as raised:
         load(shipped_model(FACE))
-    assert 'no TensorFlow Lite runtime: pip install ai-edge-litert (PC) or tflite-runtime ' \
-        '(aarch64 board)' in one_line_naming(raised.value, FACE)
+    assert 'no TensorFlow Lite runtime: pip install ai-edge-litert (PC), or on a board ' \
+        "the image's python3-tflite-runtime (petalinux/enable_ros.py)" in one_line_naming(
+            raised.value, FACE)
 
 
 def test_no_onnx_runtime_at_all(monkeypatch, tiny_onnx):
