@@ -25,6 +25,7 @@ publisher and subscriber, instrumented py_vision nodes) records one event per fr
 and writes them as JSON to the file named by its caller when it stops.
 """
 
+from contextlib import contextmanager
 import json
 import os
 from pathlib import Path
@@ -161,3 +162,35 @@ def local_node_env():
                       ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
     dds.use_packaged_profile()
     return env
+
+
+class Ended:
+    """How the processes of stopped_after ended: their exit statuses and the node's log."""
+
+    status: tuple = ()
+    log: str = ''
+
+
+@contextmanager
+def stopped_after(domain, peer, node, *others):
+    """
+    Run the with-block, then close the peer, stop the node and the others, free the domain.
+
+    The block gets an `Ended`, which holds the exit statuses and the node's log afterwards.
+
+    Each process gets SIGINT and 15 s, then is killed. When the block ended normally, a process
+    that did not exit 0, or a traceback in the node's log, ends the benchmark (SystemExit with
+    the node's log); an exception of the block's own goes on as it is.
+    """
+    ended = Ended()
+    try:
+        yield ended
+    finally:
+        peer.close()
+        ended.status = tuple(proc.stop(signal.SIGINT, 15.0) for proc in (node,) + others)
+        ended.log = node.output()
+        for proc in (node,) + others:
+            proc.kill()
+        domain.release()
+    if any(ended.status) or 'Traceback' in ended.log:
+        raise SystemExit('%s ended with %s:\n%s' % (node.name, ended.status, ended.log))

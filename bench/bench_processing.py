@@ -33,12 +33,11 @@ Prints a Markdown table and writes bench/results/processing.json.
 
 import argparse
 import os
-import signal
 import sys
 import threading
 import time
 
-from bench_common import local_node_env, save_results, StopFlag
+from bench_common import local_node_env, save_results, StopFlag, stopped_after
 import ros_harness
 
 FPS = 30.0
@@ -131,22 +130,13 @@ def measure(kind, work_ms, duration, env):
         node = ros_harness.NodeProcess(sys.executable, [__file__, 'tutorial', str(work_ms)],
                                        env, name='tutorial_processing')
     peer = ros_harness.RosPeer(domain.value, name='bench_collector')
-    try:
+    with stopped_after(domain, peer, node, camera) as ended:
         collector = Collector(peer)
         ros_harness.wait_until(lambda: collector.records, 60.0, 0.05, 'the first output')
         start = time.monotonic() + SETTLE_S
         time.sleep(SETTLE_S + duration)
         records = collector.since(start)
         records = [r for r in records if r[0] < start + duration]
-    finally:
-        peer.close()
-        status = (node.stop(signal.SIGINT, 15.0), camera.stop(signal.SIGINT, 15.0))
-        log = node.output()
-        node.kill()
-        camera.kill()
-        domain.release()
-    if status != (0, 0) or 'Traceback' in log:
-        raise SystemExit('%s ended with %s:\n%s' % (node.name, status, log))
     indices = [r[2] for r in records if r[2] is not None]
     ages = sorted(r[1] for r in records)
     camera_frames = indices[-1] - indices[0] + 1 if indices else 0
@@ -160,7 +150,7 @@ def measure(kind, work_ms, duration, env):
         'age_ms_p99': round(percentile(ages, 0.99) * 1e3, 1) if ages else None,
     }
     if kind == 'latest':
-        result['log'] = [line for line in log.splitlines() if 'frames in' in line][-1:]
+        result['log'] = [line for line in ended.log.splitlines() if 'frames in' in line][-1:]
     return result
 
 

@@ -43,12 +43,11 @@ import argparse
 import os
 from pathlib import Path
 import re
-import signal
 import statistics
 import threading
 import time
 
-from bench_common import CLK_TCK, cpu_ticks, local_node_env, save_results
+from bench_common import CLK_TCK, cpu_ticks, local_node_env, save_results, stopped_after
 import ros_harness
 
 FPS = 30.0
@@ -104,7 +103,7 @@ def measure(step, duration, threads, env):
             {'step': step, 'threads': threads}), env)
         topic = 'vision_step/image'
     peer = ros_harness.RosPeer(domain.value, name='bench_collector')
-    try:
+    with stopped_after(domain, peer, node, camera) as ended:
         collector = Collector(peer, topic)
         ros_harness.wait_until(lambda: collector.records, 90.0, 0.05, 'the first output')
         start = time.monotonic() + SETTLE_S
@@ -114,15 +113,6 @@ def measure(step, duration, threads, env):
         # The node's statistics line comes every 5 s: the last one covers the measured time.
         line = node.wait_for_output(STATS.pattern, 10.0)
         stats = STATS.findall(node.output())[-1]
-    finally:
-        peer.close()
-        status = (node.stop(signal.SIGINT, 15.0), camera.stop(signal.SIGINT, 15.0))
-        log = node.output()
-        node.kill()
-        camera.kill()
-        domain.release()
-    if status != (0, 0) or 'Traceback' in log:
-        raise SystemExit('%s ended with %s:\n%s' % (node.name, status, log))
     ages = sorted(r[1] for r in records)
     return {
         'step': step, 'node': 'cv_bridge_test' if step == 'circle' else 'vision_step',
@@ -131,19 +121,17 @@ def measure(step, duration, threads, env):
         'age_ms_p50': round(percentile(ages, 0.5) * 1e3, 1) if ages else None,
         'age_ms_p99': round(percentile(ages, 0.99) * 1e3, 1) if ages else None,
         'rss_mib': round(rss, 1),
-        'log': [text for text in log.splitlines()
+        'log': [text for text in ended.log.splitlines()
                 if 'running step' in text or 'drawing on' in text] + [line.group(0)],
     }
 
 
 def processed(arrays):
-    """Return the newest `processed` count of vision_step's /diagnostics, or None."""
-    for array in reversed(list(arrays)):
-        for status in array.status:
-            if status.name == 'vision_step: processing':
-                values = {kv.key: kv.value for kv in status.values}
-                return int(values['processed']), int(values.get('images published', -1))
-    return None
+    """Return the newest (processed, images published) of vision_step's /diagnostics, or None."""
+    values = ros_harness.status_values(arrays, 'vision_step: processing')
+    if not values:
+        return None
+    return int(values['processed']), int(values.get('images published', -1))
 
 
 def lazy_case(step, subscribed, duration, threads, env):
@@ -158,7 +146,7 @@ def lazy_case(step, subscribed, duration, threads, env):
     node = ros_harness.NodeProcess('vision_step', ros_harness.ros_args(
         {'step': step, 'threads': threads}), env)
     peer = ros_harness.RosPeer(domain.value, name='bench_lazy')
-    try:
+    with stopped_after(domain, peer, node, camera):
         arrays = peer.collect(DiagnosticArray, '/diagnostics', QoSProfile(
             depth=100, reliability=ReliabilityPolicy.RELIABLE))
         if subscribed:
@@ -176,15 +164,6 @@ def lazy_case(step, subscribed, duration, threads, env):
         count = len(arrays)
         ros_harness.wait_until(lambda: len(arrays) > count, 10.0, 0.01, 'a report')
         (end_frames, end_published), end_cpu = processed(arrays), cpu_ticks(node.pid)
-    finally:
-        peer.close()
-        status = (node.stop(signal.SIGINT, 15.0), camera.stop(signal.SIGINT, 15.0))
-        log = node.output()
-        node.kill()
-        camera.kill()
-        domain.release()
-    if status != (0, 0) or 'Traceback' in log:
-        raise SystemExit('%s ended with %s:\n%s' % (node.name, status, log))
     frames = end_frames - start_frames
     published = end_published - start_published
     if frames <= 0 or (published > 0) != subscribed:

@@ -210,6 +210,15 @@ def wait_until(predicate, timeout, interval=0.02, what='condition'):
         time.sleep(interval)
 
 
+def status_values(arrays, name):
+    """Return {key: value} of the newest status `name` in collected DiagnosticArrays, or {}."""
+    for array in reversed(list(arrays)):
+        for status in array.status:
+            if status.name == name:
+                return {kv.key: kv.value for kv in status.values}
+    return {}
+
+
 def ros_args(params=None, remaps=None):
     """Build a `--ros-args` command line tail from parameter and remapping dicts."""
     args = ['--ros-args']

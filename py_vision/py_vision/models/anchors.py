@@ -25,21 +25,21 @@ scores into boxes, keypoints and scores (TensorsToDetectionsCalculator: the offs
 input pixels, x before y, scores are clipped logits through a sigmoid); `weighted_nms` merges
 the many overlapping detections of one object into one, averaging their boxes and keypoints
 weighted by score (NonMaxSuppressionCalculator's WEIGHTED algorithm). Coordinates are
-normalized to the model's input: 0 to 1 across its width and height. `detect_in_frame` does it
+normalized to the model's input: 0 to 1 across its width and height. `SsdDetector` does it
 all on a camera frame: letterboxed into the model's input, run, decoded, merged, and the boxes
 and keypoints mapped back to the frame's pixels (the palm and the face detector).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
-from typing import List, Tuple
+from typing import List, Sequence, Tuple
 
 import numpy as np
 from py_vision.models.crops import letterbox
-from py_vision.models.runtime import Model
+from py_vision.models.runtime import find_outputs, Model
 
-__all__ = ['AnchorOptions', 'decode', 'DecodeOptions', 'detect_in_frame', 'Detections', 'iou',
-           'ssd_anchors', 'weighted_nms']
+__all__ = ['AnchorOptions', 'decode', 'DecodeOptions', 'Detections', 'iou', 'SsdDetector',
+           'SsdModel', 'ssd_anchors', 'weighted_nms']
 
 
 @dataclass(frozen=True)
@@ -195,28 +195,70 @@ def weighted_nms(detections: Detections, threshold: float = 0.3,
                       np.array(scores, np.float32))
 
 
-def detect_in_frame(model: Model, image_bgr: np.ndarray, value_range: Tuple[float, float],
-                    anchors: np.ndarray, decoding: DecodeOptions, nms_threshold: float,
-                    limit: int, outputs: Tuple[int, int] = (0, 1)
-                    ) -> List[Tuple[np.ndarray, float, np.ndarray]]:
+@dataclass(frozen=True)
+class SsdModel:
     """
-    Run a square SSD detector on a whole bgr8 frame: (box, score, keypoints), best first.
+    What tells one MediaPipe SSD detector model from another.
 
-    The frame is letterboxed into the model's input (decoding's x_scale pixels a side, values
-    in value_range); `outputs` says which of the model's outputs are the regressors and the
-    scores (runtime.find_outputs); box is (x, y, w, h) and keypoints (num_keypoints, 2), in
-    frame pixels, float32; at most `limit` detections (0: all).
+    size: its square input, pixels a side; value_range: the input's values (black, white);
+    outputs: the regressors' and the scores' (names, shape), as runtime.find_outputs takes them.
     """
-    size = decoding.x_scale
-    crop = letterbox(image_bgr, int(size), int(size), value_range)
-    results = model.run(crop.tensor)
-    regressors, scores = results[outputs[0]], results[outputs[1]]
-    found = weighted_nms(decode(regressors, scores, anchors, decoding), nms_threshold, limit)
-    detections = []
-    for box, keypoints, score in zip(found.boxes, found.keypoints, found.scores):
-        corners = crop.points_to_image(box.reshape(2, 2) * size)
-        detections.append((np.array([corners[0, 0], corners[0, 1], corners[1, 0] - corners[0, 0],
-                                     corners[1, 1] - corners[0, 1]], np.float32),
-                           float(score),
-                           crop.points_to_image(keypoints * size).astype(np.float32)))
-    return detections
+
+    size: int
+    num_keypoints: int
+    value_range: Tuple[float, float]
+    outputs: Sequence[Tuple[Sequence[str], Tuple[int, ...]]]
+    strides: Tuple[int, ...] = (8, 16, 16, 16)
+
+
+class SsdDetector:
+    """
+    A square SSD detector run on whole bgr8 frames (the palm and the face detector).
+
+    `detections(frame)` letterboxes the frame into the model's input, runs it, decodes the
+    anchors scoring at least `min_score`, merges them (weighted NMS at `nms_threshold`, at most
+    `limit`, 0: all) and returns (box, score, keypoints), best first: box (x, y, w, h) and
+    keypoints (num_keypoints, 2) in frame pixels, float32. `min_score` may change while another
+    thread detects: that detection uses the old value or the new one.
+    """
+
+    def __init__(self, model: Model, spec: SsdModel, min_score: float, nms_threshold: float,
+                 limit: int):
+        """Use a loaded model of that spec (ModelError: another model)."""
+        self._outputs = find_outputs(model, [(1, spec.size, spec.size, 3)], spec.outputs)
+        self.model = model
+        self.spec = spec
+        self.nms_threshold = nms_threshold
+        self.limit = limit
+        self._anchors = ssd_anchors(AnchorOptions(spec.size, spec.size, spec.strides))
+        size = spec.size
+        self._decoding = DecodeOptions(spec.num_keypoints, size, size, size, size, min_score)
+
+    @property
+    def min_score(self) -> float:
+        """Return the score a detection needs (0 to 1; the anchors are decoded at it)."""
+        return self._decoding.min_score
+
+    @min_score.setter
+    def min_score(self, value: float) -> None:
+        # One assignment: a detection under way on another thread uses the old or the new one.
+        self._decoding = replace(self._decoding, min_score=float(value))
+
+    def detections(self, image_bgr: np.ndarray) -> List[Tuple[np.ndarray, float, np.ndarray]]:
+        """Return the frame's detections, best first: (box, score, keypoints) in frame pixels."""
+        size = self.spec.size
+        decoding = self._decoding
+        crop = letterbox(image_bgr, size, size, self.spec.value_range)
+        results = self.model.run(crop.tensor)
+        regressors, scores = (results[index] for index in self._outputs)
+        found = weighted_nms(decode(regressors, scores, self._anchors, decoding),
+                             self.nms_threshold, self.limit)
+        detections = []
+        for box, keypoints, score in zip(found.boxes, found.keypoints, found.scores):
+            corners = crop.points_to_image(box.reshape(2, 2) * size)
+            detections.append((np.array([corners[0, 0], corners[0, 1],
+                                         corners[1, 0] - corners[0, 0],
+                                         corners[1, 1] - corners[0, 1]], np.float32),
+                               float(score),
+                               crop.points_to_image(keypoints * size).astype(np.float32)))
+        return detections

@@ -25,13 +25,13 @@ poorly or not at all (the astronaut's face: found at 94 pixels wide in a 640-wid
 0.9; at 73 pixels, score 0.6; missed at 64).
 """
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import List
 
 import numpy as np
-from py_vision.models.anchors import AnchorOptions, DecodeOptions, detect_in_frame, ssd_anchors
+from py_vision.models.anchors import SsdDetector, SsdModel
 from py_vision.models.files import shipped_model
-from py_vision.models.runtime import find_outputs, load, Model
+from py_vision.models.runtime import load, Model
 
 __all__ = ['Face', 'FaceDetector', 'FACE_KEYPOINTS']
 
@@ -41,10 +41,11 @@ FACE_KEYPOINTS = ('right_eye', 'left_eye', 'nose_tip', 'mouth_centre', 'right_ea
                   'left_ear_tragion')
 
 MODEL_FILE = 'face_detection_short_range.tflite'
-_SIZE = 128
-# The outputs read, by their names in face_detection_short_range.tflite (else the first two):
-# the regressors (box and keypoints per anchor) and the scores.
-_OUTPUTS = ((('regressors',), (1, 896, 16)), (('classificators',), (1, 896, 1)))
+# 128x128 input, values -1 to 1, six keypoints; the outputs read, by their names in
+# face_detection_short_range.tflite (else the first two): the regressors (box and keypoints
+# per anchor) and the scores.
+_MODEL = SsdModel(128, 6, (-1.0, 1.0), (
+    (('regressors',), (1, 896, 16)), (('classificators',), (1, 896, 1))))
 
 
 @dataclass
@@ -56,28 +57,13 @@ class Face:
     keypoints: np.ndarray
 
 
-class FaceDetector:
+class FaceDetector(SsdDetector):
     """Finds faces in bgr8 frames with the short-range face detection model."""
 
     def __init__(self, model: Model, min_score: float = 0.5, nms_threshold: float = 0.3,
                  max_faces: int = 0):
         """Use a loaded face_detection_short_range model; max_faces 0 means no limit."""
-        self._outputs = find_outputs(model, [(1, _SIZE, _SIZE, 3)], _OUTPUTS)
-        self.model = model
-        self.nms_threshold = nms_threshold
-        self.max_faces = max_faces
-        self._anchors = ssd_anchors(AnchorOptions(_SIZE, _SIZE, (8, 16, 16, 16)))
-        self._decoding = DecodeOptions(6, _SIZE, _SIZE, _SIZE, _SIZE, min_score)
-
-    @property
-    def min_score(self) -> float:
-        """Return the score a face needs to be found (0 to 1; the anchors are decoded at it)."""
-        return self._decoding.min_score
-
-    @min_score.setter
-    def min_score(self, value: float) -> None:
-        # One assignment: a detect() under way on another thread uses the old or the new one.
-        self._decoding = replace(self._decoding, min_score=float(value))
+        super().__init__(model, _MODEL, min_score, nms_threshold, max_faces)
 
     @classmethod
     def from_file(cls, path: str = '', threads: int = 1, **options) -> 'FaceDetector':
@@ -86,6 +72,4 @@ class FaceDetector:
 
     def detect(self, image_bgr: np.ndarray) -> List[Face]:
         """Return the faces in the frame, best score first."""
-        return [Face(box, score, keypoints) for box, score, keypoints in detect_in_frame(
-            self.model, image_bgr, (-1.0, 1.0), self._anchors, self._decoding,
-            self.nms_threshold, self.max_faces, self._outputs)]
+        return [Face(*found) for found in self.detections(image_bgr)]

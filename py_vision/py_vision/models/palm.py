@@ -26,22 +26,23 @@ the middle finger's knuckle, scaled 2.6 times the palm and moved half a palm tow
 fingers (MediaPipe's palm_detection_detection_to_roi graph).
 """
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 import math
 from typing import List
 
 import numpy as np
-from py_vision.models.anchors import AnchorOptions, DecodeOptions, detect_in_frame, ssd_anchors
-from py_vision.models.runtime import find_outputs, Model
+from py_vision.models.anchors import SsdDetector, SsdModel
+from py_vision.models.runtime import Model
 
 __all__ = ['enlarge', 'hand_region', 'HandRegion', 'Palm', 'PalmDetector', 'upright_rotation']
 
 MODEL_FILE = 'palm_detection_lite.tflite'
-_SIZE = 192
 _WRIST, _MIDDLE_KNUCKLE = 0, 2
-# The outputs read, by their names in palm_detection_lite.tflite (else the first two): the
-# regressors (box and keypoints per anchor) and the scores.
-_OUTPUTS = ((('Identity',), (1, 2016, 18)), (('Identity_1',), (1, 2016, 1)))
+# 192x192 input, values 0 to 1, seven keypoints; the outputs read, by their names in
+# palm_detection_lite.tflite (else the first two): the regressors (box and keypoints per
+# anchor) and the scores.
+_MODEL = SsdModel(192, 7, (0.0, 1.0), (
+    (('Identity',), (1, 2016, 18)), (('Identity_1',), (1, 2016, 1))))
 
 
 @dataclass
@@ -63,34 +64,17 @@ class HandRegion:
     rotation: float
 
 
-class PalmDetector:
+class PalmDetector(SsdDetector):
     """Finds palms in bgr8 frames with the palm detection model."""
 
     def __init__(self, model: Model, min_score: float = 0.5, nms_threshold: float = 0.3,
                  max_palms: int = 0):
         """Use a loaded palm_detection_lite model; max_palms 0 means no limit."""
-        self._outputs = find_outputs(model, [(1, _SIZE, _SIZE, 3)], _OUTPUTS)
-        self.model = model
-        self.nms_threshold = nms_threshold
-        self.max_palms = max_palms
-        self._anchors = ssd_anchors(AnchorOptions(_SIZE, _SIZE, (8, 16, 16, 16)))
-        self._decoding = DecodeOptions(7, _SIZE, _SIZE, _SIZE, _SIZE, min_score)
-
-    @property
-    def min_score(self) -> float:
-        """Return the score a palm needs to be found (0 to 1; the anchors are decoded at it)."""
-        return self._decoding.min_score
-
-    @min_score.setter
-    def min_score(self, value: float) -> None:
-        # One assignment: a detect() under way on another thread uses the old or the new one.
-        self._decoding = replace(self._decoding, min_score=float(value))
+        super().__init__(model, _MODEL, min_score, nms_threshold, max_palms)
 
     def detect(self, image_bgr: np.ndarray) -> List[Palm]:
         """Return the palms in the frame, best score first."""
-        return [Palm(box, score, keypoints) for box, score, keypoints in detect_in_frame(
-            self.model, image_bgr, (0.0, 1.0), self._anchors, self._decoding,
-            self.nms_threshold, self.max_palms, self._outputs)]
+        return [Palm(*found) for found in self.detections(image_bgr)]
 
 
 def upright_rotation(start: np.ndarray, end: np.ndarray) -> float:

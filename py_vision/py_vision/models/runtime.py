@@ -18,10 +18,11 @@ Model runtimes: load a model file and run it, whichever runtime is installed.
 
 `load(path)` picks the runtime by the file's extension: `.tflite` through LiteRT
 (`ai_edge_litert`, pip install ai-edge-litert on a PC) or `tflite_runtime` (on the boards: the
-image's python3-tflite-runtime, which petalinux/enable_ros.py adds); `.onnx` through onnxruntime where installed, else
-OpenCV's DNN module (the boards' OpenCV 4.6 has it). Every runtime is optional: a missing one
-is a `RuntimeMissing` naming the package to install. A file that is missing, empty, truncated
-or not a model is a `ModelError` whose one-line message names the file and what is wrong.
+image's python3-tflite-runtime, which petalinux/enable_ros.py adds); `.onnx` through
+onnxruntime where installed, else OpenCV's DNN module (the boards' OpenCV 4.6 has it). Every
+runtime is optional: a missing one is a `RuntimeMissing` naming the package to install. A file
+that is missing, empty, truncated or not a model is a `ModelError` whose one-line message names
+the file and what is wrong.
 
 The loaded `Model` says what it is (`runtime`, `inputs`, `outputs`: each a `TensorInfo`, with
 its name in the file) and checks the arrays it is given against its inputs before running. A

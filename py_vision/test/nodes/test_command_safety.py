@@ -33,11 +33,12 @@ from geometry_msgs.msg import Twist, TwistStamped
 import numpy as np
 import pytest
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from ros_harness import wait_until
+from ros_harness import status_values, wait_until
 from sensor_msgs.msg import Image
 
 RELIABLE = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 CMD_VEL = '/turtle1/cmd_vel'
+PROCESSING = 'vision_step: processing'  # the node's status in /diagnostics
 STEP = 'scripted_signs:ScriptedSigns'
 TESTS = Path(__file__).resolve().parents[1]
 
@@ -180,15 +181,6 @@ def test_the_camera_stopping_while_the_robot_moves_sends_one_zero_then_nothing(
     assert 'Traceback' not in node.output()
 
 
-def processing_values(arrays):
-    """Return the newest processing status' values of vision_step, or {}."""
-    for array in reversed(list(arrays)):
-        for status in array.status:
-            if status.name == 'vision_step: processing':
-                return {kv.key: kv.value for kv in status.values}
-    return {}
-
-
 def test_the_step_failing_after_a_moving_command_sends_one_zero(launch, peer, scripted_env):
     twists = peer.collect(Twist, CMD_VEL, RELIABLE)
     arrays = peer.collect(DiagnosticArray, '/diagnostics', RELIABLE)
@@ -200,8 +192,8 @@ def test_the_step_failing_after_a_moving_command_sends_one_zero(launch, peer, sc
     # The step fails on every frame from now on: one zero, then nothing while it fails.
     camera.send_until(lambda: after_last_moving(twists), THUMB_UP, RAISE, what='a zero')
     camera.send_until(
-        lambda: int(processing_values(arrays).get('step failed', 0)) >= 10, THUMB_UP, RAISE,
-        what='ten failed frames')
+        lambda: int(status_values(arrays, PROCESSING).get('step failed', 0)) >= 10, THUMB_UP,
+        RAISE, what='ten failed frames')
     stopped = after_last_moving(twists)
     assert len(stopped) == 1 and not moving(stopped[0]), stopped
     node.wait_for_output(r'step %s failed on a frame' % STEP)

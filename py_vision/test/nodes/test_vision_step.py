@@ -28,12 +28,13 @@ import numpy as np
 from param_client import describe_parameters, set_parameter
 import pytest
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from ros_harness import wait_until
+from ros_harness import status_values, wait_until
 from sensor_msgs.msg import Image
 from std_msgs.msg import String
 
 RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 OUTPUT = 'vision_step/image'
+PROCESSING = 'vision_step: processing'  # the node's status in /diagnostics
 
 USER_STEPS = """
 import os
@@ -284,15 +285,6 @@ def test_a_step_that_raises_is_logged_counted_and_the_node_goes_on(launch, peer,
     assert 'Traceback' not in node.output()
 
 
-def processing_values(arrays):
-    """Return the newest processing status' values of vision_step, or {}."""
-    for array in reversed(list(arrays)):
-        for status in array.status:
-            if status.name == 'vision_step: processing':
-                return {kv.key: kv.value for kv in status.values}
-    return {}
-
-
 def test_the_image_goes_out_only_while_someone_subscribes(launch, peer):
     arrays = peer.collect(DiagnosticArray, '/diagnostics', RELIABLE)
     node = launch('vision_step')  # circle
@@ -309,14 +301,14 @@ def test_the_image_goes_out_only_while_someone_subscribes(launch, peer):
             return False
         wait_until(sent_one, 60.0, interval=0.1, what=what)
     # Nobody subscribes to vision_step/image: the frames are processed, none is published.
-    send_until(lambda: int(processing_values(arrays).get('processed', 0)) >= 5,
+    send_until(lambda: int(status_values(arrays, PROCESSING).get('processed', 0)) >= 5,
                'five processed frames')
-    assert processing_values(arrays)['images published'] == '0'
+    assert status_values(arrays, PROCESSING)['images published'] == '0'
     # A subscriber arriving late gets frames, and the node counts them.
     received = peer.collect(Image, OUTPUT, RELIABLE)
     send_until(lambda: received, 'an image for the late subscriber')
     assert as_bgr(received[0])[60, 60].tolist() == [0, 0, 255]  # the circle's red
     assert received[0].header.frame_id == 'cam'
-    send_until(lambda: int(processing_values(arrays).get('images published', 0)) >= 1,
+    send_until(lambda: int(status_values(arrays, PROCESSING).get('images published', 0)) >= 1,
                'the count of images published')
     assert node.stop(signal.SIGINT) == 0
