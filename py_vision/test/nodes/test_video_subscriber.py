@@ -61,9 +61,13 @@ def read_units(url, count):
 
 def test_the_viewer_forwards_the_cameras_units_untouched_from_a_keyframe(viewer, peer):
     subscriber, url = viewer
-    clip = ClipPublisher(peer)
+    # The camera is mid-way between two keyframes when the viewer joins (as it is whenever
+    # discovery takes a while): the size is known from the first keyframe's SPS on.
+    clip = ClipPublisher(peer, first=KEYINT // 2, when_subscribed=True)
     wait_until(lambda: stats(url).get('frames', 0) >= 5, 20, interval=0.2,
                what='units received by the subscriber')
+    wait_until(lambda: stats(url)['width'] > 0, 20, interval=0.2,
+               what="a keyframe's size at the subscriber")
     s = stats(url)
     assert (s['encoding'], s['width'], s['height']) == ('h264', WIDTH, HEIGHT)
     assert s['video_codec'] == 'avc1.42c01e'
