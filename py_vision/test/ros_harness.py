@@ -379,15 +379,16 @@ class RosPeer:
         self.node = rclpy.create_node(name, context=self.context)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
+        self._closing = threading.Event()
         self._thread = threading.Thread(target=self._spin, daemon=True)
         self._thread.start()
 
     def _spin(self):
-        while self.context.ok():
+        while not self._closing.is_set() and self.context.ok():
             try:
                 self.executor.spin_once(timeout_sec=0.05)
             except Exception:  # the context was shut down under the executor
-                if self.context.ok():
+                if self.context.ok() and not self._closing.is_set():
                     raise
                 return
 
@@ -401,11 +402,13 @@ class RosPeer:
         return received
 
     def close(self):
+        """Stop the executor's thread, then destroy the node and shut its context down."""
         import rclpy
+        self._closing.set()
+        self._thread.join(5.0)
         self.executor.shutdown()
         self.node.destroy_node()
         rclpy.shutdown(context=self.context)
-        self._thread.join(2.0)
 
 
 def two_hosts_unavailable():
