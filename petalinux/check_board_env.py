@@ -121,10 +121,11 @@ def problems(rows, import_module=importlib.import_module, version_of=installed_v
     for row in rows:
         try:
             import_module(row.name)
-        except ImportError as error:
+        except Exception as error:  # noqa: B902 - ImportError, or a module broken on import
             if not row.absent:
-                found.append('%s does not import (%s); the image has it (%s %s)'
-                             % (row.name, error, row.package, row.version))
+                found.append('%s does not import (%s: %s); the image has it (%s %s)'
+                             % (row.name, type(error).__name__, error, row.package,
+                                row.version))
             continue
         if row.absent:
             found.append('%s imports, but no board image has it: remove %s from this '

@@ -131,7 +131,8 @@ bash "$root/scripts/vivid_vm.sh"
 # emulator on the shipped models (tests/test_aarch64_models.py): scripts/aarch64_root.sh
 # downloads an aarch64 Python from Debian's packages, QEMU and the wheels into a cache, and
 # installs nothing (one line where it cannot; that test is then skipped, and fails in CI).
-bash "$root/scripts/aarch64_root.sh"
+bash "$root/scripts/aarch64_root.sh" \
+  || echo '[test] scripts/aarch64_root.sh failed: the aarch64 model test will be skipped (in CI: fail)'
 
 # pytest exits 5 when it ran no test: that is a failure, except that a -k or -m that matches
 # none of a run's tests may leave that run empty.

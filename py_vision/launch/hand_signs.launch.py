@@ -53,9 +53,9 @@ from launch_ros.substitutions import FindPackageShare
 BOARD_FRAMERATE = '5.0'
 TWO_CORE_SIZE = {'image_width': '320', 'image_height': '240'}
 # The command path's timings there: a processed frame every 0.25 to 0.8 s, and a command
-# decided up to two processing times after its frame arrived (it waits for the frame before
-# it, then is processed itself). The step's own 0.5 s would stop the robot between frames or
-# for a frame not yet old: 1.5 s keeps the watchdog for a lost camera and stale frames.
+# decided up to a frame period (0.2 s at 5 fps: the step takes the newest frame) plus its
+# processing after its frame arrived. The step's own 0.5 s would stop the robot between frames
+# or for a frame not yet old: 1.5 s keeps the watchdog for a lost camera and stale frames.
 BOARD_COMMAND_S = '1.5'
 ARM_MACHINES = ('aarch64', 'arm64', 'armv7l', 'armv8l')
 # The camera's arguments with a default of this launch's own: name -> meaning.
@@ -76,9 +76,11 @@ STEP_ARGUMENTS = {
     'threads': (int, 'CPU threads of the hand and palm models; 1 keeps the step from waiting '
                      'on cores the camera and the viewer hold'),
     'command_timeout': (float, 'seconds without a processed frame after which one zero command '
-                               'goes out (%s on an ARM board)' % BOARD_COMMAND_S),
+                               'goes out; on an ARM board %s unless given here, whatever '
+                               'params_file says' % BOARD_COMMAND_S),
     'max_frame_age': (float, 'seconds since a frame arrived after which it stops the robot '
-                             'instead of steering it (%s on an ARM board)' % BOARD_COMMAND_S),
+                             'instead of steering it; on an ARM board %s unless given here, '
+                             'whatever params_file says' % BOARD_COMMAND_S),
 }
 
 # The viewer parameters that are launch arguments: name -> (type the node takes, meaning).

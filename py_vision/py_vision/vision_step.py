@@ -165,9 +165,9 @@ class _StepPublisher:
         self._publisher = publisher
         self._owner = owner
 
-    def publish(self, msg) -> None:
-        """Publish msg, unless the node is stopping and this is not its stop (then drop it)."""
-        self._owner.publish(self._publisher, msg)
+    def publish(self, msg) -> bool:
+        """Publish msg, unless the node is stopping and this is not its stop; say if sent."""
+        return self._owner.publish(self._publisher, msg)
 
     def __getattr__(self, name):
         return getattr(self._publisher, name)  # topic_name, get_subscription_count, ...

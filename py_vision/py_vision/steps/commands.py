@@ -21,7 +21,8 @@ the step fail. The gate stands between the step and its command publisher:
 
 - **Hold.** A command that moves the robot goes out only once the same *reason* (hand_signs:
   the sign) has been seen on `hold_frames` processed frames in a row; until then, and whenever
-  the reason changes, a zero command goes out instead. A zero command goes out at once.
+  the reason changes, a zero command goes out instead: a robot moving on one reason always
+  gets a zero before it moves on another, even with hold_frames 1. A zero goes out at once.
 - **Stale frames.** A frame that arrived on this host more than `max_frame_age` seconds ago by
   the time its command is decided (measured from its arrival, not from its header's stamp: the
   camera may be another machine with another clock) stops the robot instead of steering it.
@@ -61,10 +62,14 @@ class CommandGate:
     send(command, header, why) publishes one command: `command` is the step's own value (the
     gate only compares it with `zero`), `header` the frame's header (for the gate's own zeros:
     the last frame's, or None before any), `why` one of FRAME, HELD_BACK, STALE, TIMEOUT,
-    FAILED, STOPPED. `clock` is monotonic seconds (time.monotonic; a FakeClock in tests).
+    FAILED, STOPPED. It returns False when the command was not sent (the node is stopping and
+    drops what a frame under way publishes): the gate then counts it as not sent, so that its
+    last zero still goes out at stop(). `clock` is monotonic seconds (time.monotonic; a
+    FakeClock in tests).
     """
 
-    def __init__(self, send: Callable[[Any, Any, str], None], zero: Any, hold_frames: int = 3,
+    def __init__(self, send: Callable[[Any, Any, str], Optional[bool]], zero: Any,
+                 hold_frames: int = 3,
                  command_timeout: float = 0.5, max_frame_age: float = 0.5,
                  clock: Callable[[], float] = time.monotonic):
         self._send = send
@@ -77,6 +82,7 @@ class CommandGate:
         self._reason: Optional[Hashable] = None  # what the last fresh frames agreed on
         self._held = 0                           # for how many frames in a row
         self._armed = False      # a command from a frame went out since the gate's last zero
+        self._moving = False     # the last command sent was not the zero one
         self._last_command_at = 0.0
         self._last_header = None
         self._closed = False
@@ -111,11 +117,14 @@ class CommandGate:
             else:
                 self._reason, self._held = reason, 1
             why = FRAME
-            if command != self.zero and self._held < self.hold_frames:
+            # Not held long enough, or a new reason while the robot moves on another: stop.
+            if command != self.zero and (self._held < self.hold_frames
+                                         or (self._held == 1 and self._moving)):
                 command, why = self.zero, HELD_BACK
-            self._send(command, header, why)
-            self._armed = True
-            self._last_command_at = self.clock()
+            if self._send(command, header, why) is not False:
+                self._armed = True
+                self._moving = command != self.zero
+                self._last_command_at = self.clock()
             return why
 
     def frame_failed(self) -> bool:
@@ -135,9 +144,10 @@ class CommandGate:
     def stop(self) -> bool:
         """Send the last zero (when a command went out since the gate's last zero) and close."""
         with self._lock:
-            sent = self._zero_once(STOPPED)
-            self._closed = True
-            return sent
+            try:
+                return self._zero_once(STOPPED)
+            finally:
+                self._closed = True
 
     def _forget(self) -> None:
         """Forget the sign being held: a moving command needs hold_frames frames again."""
@@ -146,10 +156,12 @@ class CommandGate:
     def _zero_once(self, why: str) -> bool:
         if self._closed or not self._armed:
             return False
-        self._zero(why)
-        return True
+        return self._zero(why)
 
-    def _zero(self, why: str) -> None:
-        self._send(self.zero, self._last_header, why)
-        self._armed = False
+    def _zero(self, why: str) -> bool:
+        """Send the gate's own zero; once sent, it is armed again only by a frame's command."""
+        if self._send(self.zero, self._last_header, why) is False:
+            return False  # dropped (the node is stopping): stop() must still send one
+        self._armed = self._moving = False
         self.zeros_sent += 1
+        return True

@@ -195,8 +195,8 @@ class HandSigns(Step):
         if self.gate is not None:
             self.gate.stop()
 
-    def _send(self, twist: Twist, header: Any, why: str) -> None:
-        """Publish one command (the gate's send, under its lock)."""
+    def _send(self, twist: Twist, header: Any, why: str) -> Optional[bool]:
+        """Publish one command (the gate's send, under its lock); False: it was dropped."""
         if why not in (FRAME, HELD_BACK, STOPPED) and self._stops is not None:
             self._stops.warning(why, '%s: one zero command on %s; the next frames must hold a '
                                 'sign again' % (STOP_REASONS[why], self.twists.topic_name))
@@ -205,6 +205,5 @@ class HandSigns(Step):
                 # The gate's own zero: stamped now, with the last frame's frame_id.
                 header = Header(stamp=self._now().to_msg(),
                                 frame_id=header.frame_id if header is not None else '')
-            self.twists.publish(TwistStamped(header=header, twist=twist))
-        else:
-            self.twists.publish(twist)
+            return self.twists.publish(TwistStamped(header=header, twist=twist))
+        return self.twists.publish(twist)

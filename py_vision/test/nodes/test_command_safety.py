@@ -44,7 +44,7 @@ TESTS = Path(__file__).resolve().parents[1]
 
 # The hands a frame can show (its first pixel's blue) and what the tracker does (green).
 NONE, THUMB_UP, FIST = 0, 1, 2
-PLAIN, RAISE, BLOCK, SLOW = 0, 1, 2, 3
+PLAIN, RAISE, BLOCK, SLOW, UNTIL_STOP = 0, 1, 2, 3, 4
 
 SCRIPTED_STEP = '''
 import threading
@@ -60,8 +60,9 @@ HANDS = {1: thumb_up(), 2: place(pose((FOLDED,) * 4, THUMB_ACROSS))}
 class Scripted:
     """A tracker reading the frame's first pixel: blue the hand, green what to do."""
 
-    def __init__(self, closing):
+    def __init__(self, closing, cancelled):
         self.closing = closing
+        self.cancelled = cancelled
 
     def find(self, image):
         hand, action = int(image[0, 0, 0]), int(image[0, 0, 1])
@@ -72,6 +73,12 @@ class Scripted:
             self.closing.wait(20)
         if action == 3:
             time.sleep(1.0)
+        if action == 4:
+            print('processing until the stop begins', flush=True)
+            began = time.monotonic()
+            while not self.cancelled() and time.monotonic() - began < 20:
+                time.sleep(0.01)
+            time.sleep(max(0.0, 0.5 - (time.monotonic() - began)))
         return [Hand(HANDS[hand], 'right', 0.9)] if hand in HANDS else []
 
 
@@ -79,7 +86,7 @@ class ScriptedSigns(HandSigns):
     def start(self, context):
         note = super().start(context)
         self.closing = threading.Event()
-        self.tracker = Scripted(self.closing)
+        self.tracker = Scripted(self.closing, context.cancelled)
         return note
 
     def close(self):
@@ -224,6 +231,26 @@ def test_sigint_during_a_long_process_ends_on_a_zero_with_nothing_after_it(
     last = after_last_moving(twists)
     assert len(last) == 1 and not moving(last[0]), last
     assert 'abandoned' in node.output()
+    assert 'Traceback' not in node.output()
+
+
+def test_a_stale_frame_ending_during_the_stop_still_leaves_a_last_zero(
+        launch, peer, scripted_env):
+    # The frame under way ends once the stop has begun (its publishers silenced), too old to
+    # steer: its zero is dropped with it, so the stop itself must send the last zero.
+    twists = peer.collect(Twist, CMD_VEL, RELIABLE)
+    node = start(launch, scripted_env, command_timeout=60.0, max_frame_age=0.3)
+    camera = Camera(peer)
+    camera.send_until(lambda: any(moving(m) for m in list(twists)), THUMB_UP,
+                      what='a moving command')
+    camera.send(THUMB_UP, UNTIL_STOP)
+    node.wait_for_output('processing until the stop begins')
+    assert node.stop(signal.SIGINT, timeout=20.0) == 0
+    wait_until(lambda: after_last_moving(twists), 10.0, what='the last zero command')
+    assert nothing_for(1.0, lambda: len(after_last_moving(twists)) != 1)
+    last = after_last_moving(twists)
+    assert len(last) == 1 and not moving(last[0]), last
+    assert 'abandoned' not in node.output(), node.tail()  # it ended within the grace
     assert 'Traceback' not in node.output()
 
 

@@ -90,13 +90,17 @@ def test_a_sign_without_a_motion_stops_the_robot_at_once(stop_sign):
     assert sent.reasons()[3] == FRAME
 
 
-def test_hold_frames_1_moves_at_the_first_frame_and_hold_frames_is_taken_live():
+def test_hold_frames_1_moves_at_the_first_frame_but_stops_before_another_sign():
     gate, sent, _ = gate_and_record(hold_frames=1)
-    show(gate, ['fist', 'thumb_up'])
-    assert sent.commands() == [(-1.0, 0.0), (1.0, 0.0)]
-    gate.hold_frames = 2
+    show(gate, ['fist', 'thumb_up', 'thumb_up'])
+    # Backward, then a zero before forward: never a reversal from one frame to the next.
+    assert sent.commands() == [(-1.0, 0.0), ZERO, (1.0, 0.0)]
+    assert sent.reasons()[1] == HELD_BACK
+    show(gate, ['no_hand', 'fist'])  # stopped already: the new sign moves at once
+    assert sent.commands()[3:] == [ZERO, (-1.0, 0.0)]
+    gate.hold_frames = 2  # live
     show(gate, ['point_left', 'point_left'])
-    assert sent.commands()[2:] == [ZERO, (0.0, 1.0)]
+    assert sent.commands()[5:] == [ZERO, (0.0, 1.0)]
 
 
 def test_no_frame_for_command_timeout_sends_one_zero_then_nothing_until_frames_return():
@@ -167,6 +171,26 @@ def test_no_zero_of_the_gates_own_without_a_command_before_it():
     assert gate.check() and not gate.stop()
     assert sent.reasons() == [HELD_BACK, TIMEOUT]
     assert gate.zeros_sent == 1
+
+
+def test_a_zero_the_stopping_node_dropped_is_sent_again_by_the_stop():
+    # The node silences the step's publishers before the frame under way ends; that frame,
+    # stale, has its zero dropped (send says False): the stop must still send the last zero.
+    sent = Recorder()
+    dropping = threading.Event()
+
+    def send(command, header, why):
+        if dropping.is_set() and why != STOPPED:
+            return False
+        sent(command, header, why)
+        return True
+    gate = CommandGate(send, ZERO, hold_frames=1, max_frame_age=0.5)
+    show(gate, ['thumb_up'])
+    dropping.set()
+    assert show(gate, ['thumb_up'], age=1.0) == [STALE]
+    assert not gate.frame_failed()  # dropped too: not counted as sent
+    assert gate.stop()
+    assert sent.sent == [((1.0, 0.0), 'frame', FRAME), (ZERO, 'frame', STOPPED)]
 
 
 def test_the_stop_waits_for_a_command_being_sent_and_comes_after_it():
