@@ -29,6 +29,16 @@ SIGINT or SIGTERM (SIGKILL after 10 s). A start is reached when both happen with
 seconds (10). Unreached starts are listed with what the peer's graph held and the node's log
 (what it saw of the graph).
 
+Caught ports: every node prints Fast DDS' warnings, one for each failed read of its
+shared-memory ports ('Error receiving data'). Fast DDS 2.6.0 to 2.6.5 fail on a caught port
+thousands of times a second, and the port stays dead (docs/boards.md); with the fix (2.6.6, or
+2.6.0 with commit df904f30) a read fails once for each message whose sender has gone, which it
+takes off the port (a port holds 512, Fast DDS' default), and the port goes on working. So a
+node with more failed reads than CAUGHT_READS had a caught port. To run on another build of
+Humble (one with the fix), source its setup script after the boards' environment; the JSON
+names the libfastrtps file that ran:
+  . scripts/board_env.sh && . <that tree>/install/setup.bash && python bench/dds_discovery_repro.py
+
 Variants (all with discovery on this host, as the tests run, unless said):
   default      Fast DDS' defaults in nodes and peers
   profile      the nodes on py_vision's profile as its nodes tailor it (py_vision.dds), a
@@ -76,6 +86,8 @@ POLL_S = 0.05
 SHUTDOWN_NOISE = ('Error receiving data', 'remove_local_writer', 'Automatically unmatching',
                   'NO readers are listening')
 STUCK = 'Error receiving data: No such file or directory'
+CAUGHT_READS = 1024  # twice what a port holds; a caught 2.6.0 port fails more often each second
+LOAD_EVERY_S = 5.0
 
 
 def fast_dds_warnings():
@@ -301,6 +313,17 @@ def shm_ports(pid=None):
     return sorted(ports, key=lambda port: int(port.split()[0]))
 
 
+def port_caught(log):
+    """
+    Return (failed reads, caught) from a node's log (the module's docstring says what caught is).
+
+    Counted in the whole text: Fast DDS writes a line in pieces, and a print of the node's may
+    come between them.
+    """
+    failures = log.count(STUCK)
+    return failures, failures > CAUGHT_READS
+
+
 def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir, peers):
     """
     Start, reach and stop `starts` nodes one after the other; append a record for each.
@@ -332,22 +355,29 @@ def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir, 
             except subprocess.TimeoutExpired:
                 os.killpg(proc.pid, signal.SIGKILL)
                 status = proc.wait()
-        lines = log_path.read_text(errors='replace').splitlines()
+        text = log_path.read_text(errors='replace')
+        lines = text.splitlines()
+        failures, caught = port_caught(text)
         record = {'lane': lane, 'number': number, 'name_s': seen, 'answer_s': answered,
                   'reached': seen is not None and answered is not None, 'status': status,
                   # Other lanes' nodes whose messages it received (through shared memory in
-                  # `split`), and how often Fast DDS 2.6.0's shared-memory listener failed
-                  # (docs/boards.md: it repeats tens of thousands of times once stuck).
+                  # `split`), how often Fast DDS' shared-memory listener failed (docs/boards.md:
+                  # 2.6.0 repeats it tens of thousands of times once caught), and whether its
+                  # port was caught.
                   'heard': sum(1 for line in lines if ' heard ' in line),
-                  'shm_read_failures': sum(1 for line in lines if STUCK in line)}
-        if not record['reached'] or record['shm_read_failures'] or status != 0:
+                  'shm_read_failures': failures, 'shm_caught': caught}
+        if not record['reached'] or failures or status != 0:
             record['graph'] = graph
             record['log'] = [line for line in lines
                              if not any(noise in line for noise in SHUTDOWN_NOISE)][-40:]
             if not record['reached']:
                 print('  unreached %s: %s' % (name, json.dumps(graph)), flush=True)
-            elif record['shm_read_failures']:
-                print('  %s reached, its shared-memory listener stuck' % name, flush=True)
+            elif caught:
+                print('  %s reached, its shared-memory port caught (%d failed reads)' % (
+                    name, failures), flush=True)
+            elif failures:
+                print('  %s reached, %d failed reads, its shared-memory port still read' % (
+                    name, failures), flush=True)
             else:
                 print('  %s reached, exit status %s' % (name, status), flush=True)
         else:
@@ -356,6 +386,14 @@ def run_lane(lane, starts, within, nodes_env, domain_id, rng, results, workdir, 
         if len(results) % 50 == 0:
             print('  %d starts, %d reached' % (
                 len(results), sum(1 for r in results if r['reached'])), flush=True)
+
+
+def sample_load(loads, done):
+    """Append the 1-minute load average to loads every LOAD_EVERY_S until done is set."""
+    while True:
+        loads.append(round(os.getloadavg()[0], 2))
+        if done.wait(LOAD_EVERY_S):
+            return
 
 
 def measure(variant, total, lanes, within, peers):
@@ -378,6 +416,9 @@ def measure(variant, total, lanes, within, peers):
         before = fast_dds_segments()
         results = []
         started = time.monotonic()
+        loads, done = [], threading.Event()
+        sampler = threading.Thread(target=sample_load, args=(loads, done), daemon=True)
+        sampler.start()
         per_lane = [total // lanes + (1 if lane < total % lanes else 0) for lane in range(lanes)]
         threads = [threading.Thread(target=run_lane, args=(
             lane, per_lane[lane], within, nodes_env, domain_id,
@@ -387,6 +428,9 @@ def measure(variant, total, lanes, within, peers):
             thread.start()
         for thread in threads:
             thread.join()
+        done.set()
+        sampler.join()
+        loads.sort()  # at least one sample: the first is taken at once
         reached = [r for r in results if r['reached']]
         answers = sorted(r['answer_s'] for r in reached)
         return {
@@ -395,11 +439,14 @@ def measure(variant, total, lanes, within, peers):
             'answer_median_s': round(answers[len(answers) // 2], 2) if answers else None,
             'answer_max_s': round(answers[-1], 2) if answers else None,
             'not_stopped_cleanly': sum(1 for r in results if r['status'] != 0),
-            'shm_stuck': sum(1 for r in results if r['shm_read_failures']),
+            'shm_read_failed': sum(1 for r in results if r['shm_read_failures']),
+            'shm_caught': sum(1 for r in results if r['shm_caught']),
             'heard_none': sum(1 for r in results if not r['heard']),
             'shm_files_before': before, 'shm_files_after': fast_dds_segments(),
             'seconds': round(time.monotonic() - started, 1), 'lanes': lanes, 'within_s': within,
             'domain_id': domain_id,
+            # the 1-minute load average, sampled every LOAD_EVERY_S: lowest, median, highest
+            'load': [loads[0], loads[len(loads) // 2], loads[-1]],
         }
     finally:
         if daemon is not None:
@@ -415,6 +462,7 @@ def versions():
         with open('/proc/self/maps') as maps:
             libs = {line.split()[-1] for line in maps if 'libfastrtps.so' in line}
         found['fastdds'] = sorted(os.path.realpath(lib).rsplit('.so.', 1)[-1] for lib in libs)
+        found['fastdds_library'] = sorted(os.path.realpath(lib) for lib in libs)
     except OSError:
         pass
     found['rclpy'] = os.path.dirname(rclpy.__file__)
@@ -460,13 +508,14 @@ def main(argv=None):
         for peer in peers:
             peer.close()
     print()
-    print('| variant | Fast DDS | reached within %gs | median / max answer (s) | time (s) |'
-          % args.within)
-    print('|---|---|---|---|---|')
+    print('| variant | Fast DDS | reached within %gs | ports caught (nodes with failed reads) '
+          '| median / max answer (s) | load | time (s) |' % args.within)
+    print('|---|---|---|---|---|---|---|')
     for run in runs:
-        print('| %s | %s | %d of %d | %s / %s | %.0f |' % (
+        print('| %s | %s | %d of %d | %d (%d) | %s / %s | %.1f to %.1f | %.0f |' % (
             run['variant'], ','.join(found.get('fastdds', [])), run['reached'], run['starts'],
-            run['answer_median_s'], run['answer_max_s'], run['seconds']))
+            run['shm_caught'], run['shm_read_failed'], run['answer_median_s'],
+            run['answer_max_s'], run['load'][0], run['load'][2], run['seconds']))
     return 0
 
 
