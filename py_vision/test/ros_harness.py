@@ -210,6 +210,14 @@ def wait_until(predicate, timeout, interval=0.02, what='condition'):
         time.sleep(interval)
 
 
+def signal_name(number):
+    """Return the name of signal `number` (SIGSEGV for 11), or 'signal N' for one Python lacks."""
+    try:
+        return signal.Signals(number).name
+    except ValueError:
+        return 'signal %d' % number
+
+
 def status_values(arrays, name):
     """Return {key: value} of the newest status `name` in collected DiagnosticArrays, or {}."""
     for array in reversed(list(arrays)):
@@ -300,7 +308,12 @@ class NodeProcess:
             text = '(log unavailable: %s)' % error
         kept = text.splitlines()[-lines:]
         status = self.proc.poll()
-        state = 'running' if status is None else 'exit status %s' % status
+        if status is None:
+            state = 'running'
+        elif status < 0:  # a signal: by name, SIGSEGV says more than -11
+            state = 'ended by %s' % signal_name(-status)
+        else:
+            state = 'exit status %s' % status
         return '--- %s (%s), last %d lines of its log: %s\n%s' % (
             self.name, state, len(kept), ' '.join(self.cmd), '\n'.join(kept))
 

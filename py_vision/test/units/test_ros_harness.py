@@ -15,6 +15,8 @@
 
 """The tests' own harness: what its helpers promise the tests that use them."""
 
+import sys
+
 import ros_harness
 
 
@@ -32,3 +34,19 @@ def test_a_peer_stops_spinning_before_its_node_is_destroyed(domain_id):
     peer.node.destroy_node = recorded_destroy
     peer.close()
     assert spinning_at_destroy == [False]
+
+
+def test_a_node_ended_by_a_signal_is_named_by_it_in_its_log_tail(tmp_path):
+    # A node that crashes as it stops (Fast DDS 2.6's teardown SIGSEGV, docs/boards.md) must
+    # read as such in the failing test, not as "exit status -11".
+    script = ('import os, resource, signal; resource.setrlimit(resource.RLIMIT_CORE, (0, 0)); '
+              'print("closing", flush=True); os.kill(os.getpid(), signal.SIGSEGV)')
+    proc = ros_harness.NodeProcess(sys.executable, ['-c', script], dict(ros_harness.plain_env()),
+                                   name='crashing', log_dir=str(tmp_path))
+    status = proc.wait_exit(timeout=20.0)
+    assert status == -11
+    tail = proc.tail()
+    assert '(ended by SIGSEGV)' in tail and 'closing' in tail, tail
+    assert 'exit status' not in tail
+    assert ros_harness.signal_name(2) == 'SIGINT'
+    assert ros_harness.signal_name(200) == 'signal 200'
