@@ -112,23 +112,25 @@ def board_defaults():
     return defaults
 
 
+def given(context, arguments):
+    """Return the parameters of `arguments` (name -> (type, meaning)) given a value."""
+    return {name: ParameterValue(LaunchConfiguration(name), value_type=kind)
+            for name, (kind, _) in arguments.items()
+            if LaunchConfiguration(name).perform(context)}
+
+
 def start_step(context):
     """Return vision_step running hand_signs, with the step arguments given."""
-    given = {name: ParameterValue(LaunchConfiguration(name), value_type=kind)
-             for name, (kind, _) in STEP_ARGUMENTS.items()
-             if LaunchConfiguration(name).perform(context)}
     return [Node(package='py_vision', executable='vision_step', output='screen',
                  parameters=[LaunchConfiguration('params_file'),
-                             dict(given, step='hand_signs')])]
+                             dict(given(context, STEP_ARGUMENTS), step='hand_signs')])]
 
 
 def start_viewer(context):
     """Return the subscriber, remapped to vision_step/image, with the viewer arguments given."""
-    given = {name: ParameterValue(LaunchConfiguration(name), value_type=kind)
-             for name, (kind, _) in VIEWER_ARGUMENTS.items()
-             if LaunchConfiguration(name).perform(context)}
     return [Node(package='py_vision', executable='usbcam_subscriber', output='screen',
-                 parameters=[LaunchConfiguration('params_file'), given],
+                 parameters=[LaunchConfiguration('params_file'),
+                             given(context, VIEWER_ARGUMENTS)],
                  remappings=[('usb_camera/image', 'vision_step/image')])]
 
 
@@ -151,16 +153,17 @@ def start_turtlesim(context):
 
 def generate_launch_description():
     """Declare the arguments, include the camera, start the step, the viewer and turtlesim."""
+    defaults = board_defaults()
     return LaunchDescription([
         DeclareLaunchArgument(
             'params_file', description='parameter file of the py_vision nodes',
             default_value=PathJoinSubstitution(
                 [FindPackageShare('py_vision'), 'config', 'params.yaml'])),
         # Declared before camera.launch.py, whose own declarations then keep these defaults.
-        *[DeclareLaunchArgument(name, default_value=board_defaults().get(name, ''),
+        *[DeclareLaunchArgument(name, default_value=defaults.get(name, ''),
                                 description=meaning)
           for name, meaning in BOARD_ARGUMENTS.items()],
-        *[DeclareLaunchArgument(name, default_value=board_defaults().get(name, ''),
+        *[DeclareLaunchArgument(name, default_value=defaults.get(name, ''),
                                 description='%s (empty: the value in params_file)' % meaning)
           for name, (_, meaning) in list(STEP_ARGUMENTS.items()) + list(
               VIEWER_ARGUMENTS.items())],

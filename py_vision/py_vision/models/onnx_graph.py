@@ -246,7 +246,10 @@ def read_signature(data: bytes) -> Tuple[Signature, Signature]:
     listed as inputs by older exporters) are left out. The scale and zero point of a quantised
     input or output (the module's docstring), else None and 0. Raises OnnxFormatError.
     """
-    graph = _Graph(_graph_of(data))
+    return _signature(_Graph(_graph_of(data)))
+
+
+def _signature(graph: _Graph) -> Tuple[Signature, Signature]:
     inputs = [item for item in graph.inputs if item[0] not in graph.initializers]
     if not inputs or not graph.outputs:
         raise OnnxFormatError('has a graph without inputs or outputs')
@@ -297,7 +300,7 @@ def without_edge_quantization(data: bytes) -> Tuple[bytes, Dict[str, str]]:
     """
     model_graph = _graph_of(data)
     graph = _Graph(model_graph)
-    inputs, outputs = read_signature(data)
+    inputs, outputs = _signature(graph)
     dropped, renamed, replaced = [], {}, {}
     for items, is_input in ((inputs, True), (outputs, False)):
         for name, shape, _, scale, _ in items:

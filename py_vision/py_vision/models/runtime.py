@@ -201,20 +201,14 @@ def _shape_text(shape: Tuple[int, ...]) -> str:
     return '(%s)' % ', '.join('?' if size < 0 else str(size) for size in shape)
 
 
-class RuntimeModel:
+class RuntimeModel(Model):
     """
     What every runtime shares: run() checks and quantises the inputs, dequantises the outputs.
 
-    A runtime sets path, runtime, threads, inputs and outputs, and implements `_invoke`: run
-    once on one array per input, each of that input's shape and own type, and return the
-    outputs as the model gives them, in order.
+    A runtime sets Model's path, runtime, threads, inputs and outputs, and implements
+    `_invoke`: run once on one array per input, each of that input's shape and own type, and
+    return the outputs as the model gives them, in order.
     """
-
-    path: str
-    runtime: str
-    threads: int
-    inputs: Tuple[TensorInfo, ...]
-    outputs: Tuple[TensorInfo, ...]
 
     def run(self, *arrays: np.ndarray) -> List[np.ndarray]:
         results = self._invoke(_check_arrays(self, arrays))
