@@ -515,8 +515,6 @@ class FilePlan:
 class LayerPlan:
     """Placing all of petalinux/meta-user: one FilePlan a file, and warnings about the rest."""
 
-    label = 'meta-user'
-
     def __init__(self, files):
         self.files = files
         self.warnings = []
@@ -621,8 +619,8 @@ def plan_layer(project):
         path = os.path.join(project, META_USER, relative)
         files.append(FilePlan(relative, path, ours, read_bytes(path, 'meta-user file')))
     plan = LayerPlan(files)
-    for relative in [file.relative for file in files]:
-        plan.warnings += other_versions(project, relative)
+    for file in files:
+        plan.warnings += other_versions(project, file.relative)
     plan.warnings += dangling_appends(project, [file.relative for file in files
                                                 if file.relative.endswith('.bbappend')])
     return plan
@@ -855,17 +853,15 @@ def run(args, out, err):
     assignments_path = os.path.join(project, ROOTFS_CONFIG)
     layer_conf_path = os.path.join(project, LAYER_CONF)
     layer = plan_layer(project)
-    plans = [
-        plan_declarations(declarations_path, read_text(declarations_path, 'user-rootfsconfig'),
-                          declare),
-        plan_assignments(assignments_path, read_text(assignments_path, 'rootfs_config'),
-                         enable),
-        plan_layer_conf(layer_conf_path,
-                        read_text(layer_conf_path, "the meta-user layer's layer.conf"),
-                        os.path.abspath(os.path.join(project, META_USER)),
-                        [plan.relative for plan in layer.files
-                         if recipe_name(os.path.basename(plan.relative))]),
-    ]
+    declarations = plan_declarations(
+        declarations_path, read_text(declarations_path, 'user-rootfsconfig'), declare)
+    assignments = plan_assignments(
+        assignments_path, read_text(assignments_path, 'rootfs_config'), enable)
+    conf = plan_layer_conf(
+        layer_conf_path, read_text(layer_conf_path, "the meta-user layer's layer.conf"),
+        os.path.abspath(os.path.join(project, META_USER)),
+        [plan.relative for plan in layer.files if recipe_name(os.path.basename(plan.relative))])
+    plans = [declarations, assignments, conf]  # the text files' plans; the layer's is apart
     out.write('board: %s (%s), %s\n' % (board, BOARDS[board][0], reason))
     for plan in plans:
         for warning in plan.warnings:
@@ -894,15 +890,17 @@ def run(args, out, err):
     else:
         if layer.differing and not args.replace:
             raise ToolError('nothing written: %s' % differing_error(layer, project))
-        writes = [(plan.path, plan.new_text) for plan in plans[:2] if plan.changed]
+        # The layer's files before the layer.conf line that makes bitbake read them.
+        writes = [(plan.path, plan.new_text) for plan in (declarations, assignments)
+                  if plan.changed]
         writes += [(plan.path, plan.ours) for plan in layer.files if plan.state != 'same']
-        writes += [(plans[2].path, plans[2].new_text)] if plans[2].changed else []
+        writes += [(conf.path, conf.new_text)] if conf.changed else []
         for path, content in writes:
             try:
                 write_atomically(path, content)
             except OSError as error:
                 raise ToolError('cannot write %s: %s' % (path, error.strerror or error))
-    for plan in plans[:2] + [layer, plans[2]]:
+    for plan in (declarations, assignments, layer, conf):
         out.write(summary(plan, args.replace) + '\n')
         if plan is layer:
             for file in layer.files:

@@ -561,11 +561,14 @@ def test_missing_or_unreadable_files_are_clear_errors(tmp_path, breakage, messag
         assert not (project / META_USER / 'recipes-ros').exists()
 
 
-def test_check_and_dry_run_together_is_a_usage_error(tmp_path):
+@pytest.mark.parametrize('together', [('--check', '--dry-run'), ('--replace', '--check')])
+def test_modes_that_cannot_go_together_are_a_usage_error(tmp_path, together):
     project = make_project(tmp_path, 'zub1cg', 'fresh')
-    result = run_tool(project, '--check', '--dry-run')
+    before = project_files(project)
+    result = run_tool(project, *together)
     assert result.returncode == 2
     assert 'not allowed with' in result.stderr
+    assert project_files(project) == before
 
 
 # ---------------------------------------------------------------------------------------------
@@ -842,6 +845,16 @@ def test_new_layer_files_get_the_umask_mode(tmp_path):
         assert (project / META_USER / relative).stat().st_mode & 0o777 == 0o640
     assert (project / META_USER / 'recipes-ros').stat().st_mode & 0o777 == 0o750
     assert not list(project.rglob('*.enable_ros.tmp'))
+
+
+def test_a_file_where_a_layer_directory_goes_is_a_clear_error(tmp_path):
+    project = make_project(tmp_path, 'zub1cg', 'fresh')
+    (project / META_USER / 'recipes-ros').write_text('not a directory\n')
+    before = project_files(project)
+    result = run_tool(project)
+    assert result.returncode == 2
+    assert 'a file stands where a directory of its path should be' in result.stderr
+    assert project_files(project) == before
 
 
 def test_a_directory_where_a_layer_file_goes_is_a_clear_error(tmp_path):
