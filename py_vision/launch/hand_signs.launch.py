@@ -76,11 +76,11 @@ STEP_ARGUMENTS = {
     'threads': (int, 'CPU threads of the hand and palm models; 1 keeps the step from waiting '
                      'on cores the camera and the viewer hold'),
     'command_timeout': (float, 'seconds without a processed frame after which one zero command '
-                               'goes out; on an ARM board %s unless given here, whatever '
-                               'params_file says' % BOARD_COMMAND_S),
+                               'goes out (%s on an ARM board, whatever params_file says; '
+                               'elsewhere empty: the value in params_file)' % BOARD_COMMAND_S),
     'max_frame_age': (float, 'seconds since a frame arrived after which it stops the robot '
-                             'instead of steering it; on an ARM board %s unless given here, '
-                             'whatever params_file says' % BOARD_COMMAND_S),
+                             'instead of steering it (%s on an ARM board, whatever params_file '
+                             'says; elsewhere empty: the value in params_file)' % BOARD_COMMAND_S),
 }
 
 # The viewer parameters that are launch arguments: name -> (type the node takes, meaning).
@@ -163,8 +163,9 @@ def generate_launch_description():
         *[DeclareLaunchArgument(name, default_value=defaults.get(name, ''),
                                 description=meaning)
           for name, meaning in BOARD_ARGUMENTS.items()],
-        *[DeclareLaunchArgument(name, default_value=defaults.get(name, ''),
-                                description='%s (empty: the value in params_file)' % meaning)
+        *[DeclareLaunchArgument(name, default_value=defaults.get(name, ''), description=(
+            meaning if 'params_file' in meaning else '%s (empty: the value in params_file)'
+            % meaning))
           for name, (_, meaning) in list(STEP_ARGUMENTS.items()) + list(
               VIEWER_ARGUMENTS.items())],
         IncludeLaunchDescription(PythonLaunchDescriptionSource(PathJoinSubstitution(

@@ -156,11 +156,11 @@ def integer_input_model_bytes():
                   [('xq', INPUT_SHAPE, np.int8)], [('y', INPUT_SHAPE)], opset=13)
 
 
-def quantize(values, quant, dtype):
-    """Return float values quantised as the ONNX and TFLite kernels do (half to even)."""
+def quantize(values, quant, dtype, rounding=np.round):
+    """Return float values quantised as the ONNX kernels do (rounding: half to even)."""
     scale, zero = quant
     info = np.iinfo(dtype)
-    return np.clip(np.round(np.asarray(values, np.float32) / np.float32(scale)) + zero,
+    return np.clip(rounding(np.asarray(values, np.float32) / np.float32(scale)) + zero,
                    info.min, info.max).astype(dtype)
 
 

@@ -26,10 +26,9 @@ schema.fbs (Model, OperatorCode, SubGraph, Tensor, QuantizationParameters, Opera
 import struct
 
 import numpy as np
+from onnx_model import dequantize, quantize, X_QUANT, Y_QUANT  # the ONNX model's numbers
 
 INPUT_SHAPE = (1, 4, 6)
-X_QUANT = (0.04, -5)
-Y_QUANT = (0.03, 12)
 INT8, UINT8, FLOAT32 = 9, 3, 0  # TensorType
 DEQUANTIZE, QUANTIZE = 6, 114  # BuiltinOperator
 
@@ -135,16 +134,6 @@ def model_bytes(channels=1):
     return bytes(out.data)
 
 
-def _quantize(values, quant, dtype, rounding):
-    scaled = np.asarray(values, np.float32) / np.float32(quant[0])
-    info = np.iinfo(dtype)
-    return np.clip(rounding(scaled) + quant[1], info.min, info.max).astype(dtype)
-
-
-def _dequantize(values, quant):
-    return ((values.astype(np.int32) - quant[1]) * np.float32(quant[0])).astype(np.float32)
-
-
 def _half_away_from_zero(values):
     return np.sign(values) * np.floor(np.abs(values) + 0.5)
 
@@ -152,8 +141,8 @@ def _half_away_from_zero(values):
 def expected(x):
     """Return what load() gives for float values x: quantised in, requantised, dequantised."""
     # load() rounds half to even (np.round); TensorFlow Lite's QUANTIZE half away from zero.
-    x = _dequantize(_quantize(x, X_QUANT, np.int8, np.round), X_QUANT)
-    return _dequantize(_quantize(x, Y_QUANT, np.uint8, _half_away_from_zero), Y_QUANT)
+    x = dequantize(quantize(x, X_QUANT, np.int8), X_QUANT)
+    return dequantize(quantize(x, Y_QUANT, np.uint8, _half_away_from_zero), Y_QUANT)
 
 
 def write(path, channels=1):

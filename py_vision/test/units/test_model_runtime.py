@@ -30,6 +30,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import onnx_model
+from py_vision.models import faces, hands, palm
 from py_vision.models.files import SHIPPED, shipped_model
 from py_vision.models.onnx_graph import read_signature
 from py_vision.models.runtime import find_outputs, load, ModelError, RuntimeMissing, TensorInfo
@@ -265,11 +266,19 @@ SHIPPED_OUTPUTS = {
 }
 
 
+# What the steps look for in each file: (names, shape) of each output they read.
+STEPS_WANT = {palm.MODEL_FILE: palm._MODEL.outputs, hands.LANDMARK_FILE: hands._OUTPUTS,
+              faces.MODEL_FILE: faces._MODEL.outputs}
+
+
 @pytest.mark.parametrize('name', SHIPPED)
 def test_the_shipped_models_outputs_have_the_names_the_steps_read(name):
     model = load(shipped_model(name))
     assert [(info.name, info.shape) for info in model.outputs] == SHIPPED_OUTPUTS[name]
     assert all(info.dtype == np.float32 and info.scale is None for info in model.outputs)
+    # Each output a step reads is found by one of its names, not by position.
+    names = [info.name for info in model.outputs]
+    assert all(set(wanted) & set(names) for wanted, _ in STEPS_WANT[name]), names
 
 
 def fake_model(*outputs):
