@@ -19,7 +19,8 @@ Usage: bare_image_subscriber.py OUT.json RELIABILITY
 Subscribes to usb_camera/image (sensor_msgs/Image) and records, per message, the monotonic
 arrival time, the frame index (header.frame_id when it is a number, as the reference publisher
 sends it, else decoded from the synthetic source's image) and the latency from header.stamp to
-the callback. Prints FIRST_FRAME_MARK at the first frame and writes OUT.json on SIGINT/SIGTERM.
+the callback, and the first message's encoding. Prints FIRST_FRAME_MARK at the first frame and
+writes OUT.json on SIGINT/SIGTERM.
 """
 
 import sys
@@ -40,6 +41,7 @@ class Recorder:
     def __init__(self, node):
         self.clock = node.get_clock()
         self.events = []
+        self.encoding = None
 
     def frame_index(self, msg):
         if msg.header.frame_id.isdigit():
@@ -54,6 +56,7 @@ class Recorder:
         arrival = monotonic()
         stamp_ns = msg.header.stamp.sec * 1000000000 + msg.header.stamp.nanosec
         if not self.events:
+            self.encoding = msg.encoding
             announce_first_frame()
         self.events.append((arrival, self.frame_index(msg), (now_ns - stamp_ns) / 1e9))
 
@@ -73,7 +76,7 @@ def main():
         while not stop.is_set():
             executor.spin_once(timeout_sec=0.1)
     finally:
-        write_json(out, {'received': recorder.events})
+        write_json(out, {'received': recorder.events, 'encoding': recorder.encoding})
         node.destroy_node()
         rclpy.try_shutdown()
 
