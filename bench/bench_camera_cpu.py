@@ -125,7 +125,7 @@ def peer_executables(env):
         ldd = subprocess.run(['ldd', path], env=env, capture_output=True, text=True)
         absent = [line.split()[0] for line in ldd.stdout.splitlines() if 'not found' in line]
         if absent:
-            raise SystemExit('%s cannot run: %s not found; install Debian\'s %s' % (
+            raise SystemExit("%s cannot run: %s not found; install Debian's %s" % (
                 path, ', '.join(absent), PEER_LIBRARIES))
     return found
 
