@@ -39,10 +39,13 @@ The C++ drivers exist only for Humble: in the main environment (Jazzy) py_vision
 subscriber run on Jazzy and the peers and theirs on the boards' Humble.
 
 Measured: the CPU of the driver's process (utime + stime from /proc) over a window after the
-frames have settled, and the frames its subscriber received in that window (the delivered
-rate, which must be the camera's for a ratio to mean anything). The cases alternate within
-each round (each round in another order); the table gives medians over the rounds, and the
-ratios are py_vision's median over each peer's (profile). Prints a Markdown table and writes
+frames have settled, the frames the camera filled for it in that window (captured) and those
+its subscriber received (delivered): both must be the camera's rate for a ratio to mean
+anything, and a row that falls short says so. The camera is plugged in anew before each case
+(a driver inherits no format from the one before). The cases alternate within each round
+(each round in another order); the table gives medians over the rounds, and the ratios are
+py_vision's median over each peer's (profile), and in brackets the median of each round's
+own ratio. Prints a Markdown table and writes
 bench/results/camera_cpu-py<version>.json. The C++ drivers need Debian's
 libopencv-core406 libopencv-imgproc406 libopencv-imgcodecs406 libavcodec59 libavutil57
 libswscale6 libconsole-bridge1.0 libyaml-cpp0.7 (the run says which are missing).
@@ -166,6 +169,9 @@ def run_case(case, mode, camera, envs, peers, window, workdir):
     """Run one driver and its subscriber; return the driver's CPU and the delivered rate."""
     width, height, fps = mode
     ours = case.startswith('py_vision')
+    # Plugged in anew: the format and rate the last driver left on the device go (a driver
+    # that sets the rate before the size, as v4l2_camera does, would keep the last rate).
+    camera.replug()
     domain = ros_harness.DomainId()
     env = camera.env(dict(envs['ours' if ours else 'humble'], ROS_DOMAIN_ID=str(domain.value)))
     for name in ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE',
@@ -217,6 +223,19 @@ def median(values):
     return round(statistics.median(values), 3) if values else None
 
 
+def round_ratios(results, mode, case, peer):
+    """Return the median of a case's CPU over a peer's, each round's own."""
+    ratios = []
+    for run in results:
+        if (run['mode'], run['case']) != (mode, case):
+            continue
+        base = [r['cpu_percent'] for r in results
+                if (r['mode'], r['case'], r['round']) == (mode, peer, run['round'])]
+        if base and base[0]:
+            ratios.append(run['cpu_percent'] / base[0])
+    return median(ratios)
+
+
 def summarise(results, modes, cases):
     """Return one row per (mode, case): medians over the rounds, ratios to the peers."""
     rows = []
@@ -234,12 +253,15 @@ def summarise(results, modes, cases):
                 'cpu_percent': median(r['cpu_percent'] for r in runs),
                 'cpu_percent_runs': [r['cpu_percent'] for r in runs],
                 'cpu_ms_per_frame': median(r['cpu_ms_per_frame'] for r in runs),
-                'kept_up': all(r['delivered_fps'] >= DELIVERED_MIN * fps for r in runs)}
+                'kept_up': all(min(r['delivered_fps'], r['captured_fps'])
+                               >= DELIVERED_MIN * fps for r in runs)}
         for row in by_case.values():
             for peer in PEERS:
                 base = by_case.get(peer)
                 if base and base['cpu_percent'] and row['case'] not in PEERS:
                     row['x ' + peer] = round(row['cpu_percent'] / base['cpu_percent'], 2)
+                    row['x %s, per round' % peer] = round_ratios(
+                        results, mode, row['case'], peer)
             rows.append(row)
     return rows
 
@@ -249,10 +271,15 @@ def print_table(rows, loads):
           'x v4l2_camera (profile) | x usb_cam (profile) |')
     print('|---|---|---|---:|---:|---:|---:|---:|')
     for r in rows:
+        ratios = []
+        for peer in PEERS:
+            ratios.append('%.2f (%.2f)' % (r['x ' + peer], r['x %s, per round' % peer])
+                          if 'x ' + peer in r else '-')
         print('| %s | %s | %s | %.1f%s | %.2f | %.3f ms | %s | %s |' % (
             r['mode'], r['case'], r['encoding'], r['delivered_fps'],
             '' if r['kept_up'] else ' (short)', r['cpu_percent'], r['cpu_ms_per_frame'] or 0,
-            r.get('x v4l2_camera (profile)', '-'), r.get('x usb_cam (profile)', '-')))
+            *ratios))
+    print('\nratios: the medians\' ratio (the median of each round\'s own ratio)')
     print('\nload average (1 min) during the run: %.1f to %.1f on %d CPUs' % (
         min(loads), max(loads), os.cpu_count()))
 
