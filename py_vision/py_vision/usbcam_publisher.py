@@ -371,7 +371,7 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
             output, picture = self.output_encoding, frame.pixel_format.picture
             raw, compressed = self.images.publish(
                 header, lambda: frame.image(output), frame.jpeg, frame.encoding(output),
-                lambda: frame.image(picture))
+                lambda: frame.image(picture), lambda out: frame.image(output, out))
             self.frames_decoded += frame.decoded
         info = self.calibration.camera_info(camera.width, camera.height)
         info.header = header

@@ -24,11 +24,12 @@ yuv422_yuy2 for YUYV, nv21 and nv24), whether it is compressed, how its bytes li
 (`Plane`s: bytes per pixel across, pixels per row down, which also give its bus cost) and how
 it converts to bgr8, rgb8, mono8 and mono16 (OpenCV on a view of the buffer, with what that
 costs), into a new array or into one given (`convert(view, output, out)`: a message's own
-bytes, so that a frame's pixels are written once on their way out). A camera's own video (H.264, HEVC) is compressed and has no conversion of a frame on
-its own: its frames are decoded as a stream (video_decoder), and `auto` never chooses it.
-Negotiation (`auto`), listing, diagnostics, the frames, the synthetic camera and the
-emulated test cameras all read it; `from_yuyv` is how the test cameras make a format from their
-YUYV picture. A new format is one entry in `_table()`.
+bytes, so that a frame's pixels are written once on their way out). A camera's own video
+(H.264, HEVC) is compressed and has no conversion of a frame on its own: its frames are
+decoded as a stream (video_decoder), and `auto` never chooses it. Negotiation (`auto`),
+listing, diagnostics, the frames, the synthetic camera and the emulated test cameras all read
+it; `from_yuyv` is how the test cameras make a format from their YUYV picture. A new format is
+one entry in `_table()`.
 """
 
 from dataclasses import dataclass

@@ -17,9 +17,10 @@ The pixel format table and the V4L2 structures py_vision streams with.
 
 The names a user types find their format; layouts with padded rows read the same picture as
 unpadded ones; a frame converts into a message's bytes as into an array of its own, and a JPEG
-that does not decode is no picture whatever the output; the streaming structures have the sizes and ioctl numbers of
-linux/videodev2.h on 64-bit machines. (docs/transport.md's table is checked against this one
-by the repository's tests/test_docs_match_code.py: the package alone has no docs/.)
+that does not decode is no picture whatever the output; the streaming structures have the
+sizes and ioctl numbers of linux/videodev2.h on 64-bit machines. (docs/transport.md's table
+is checked against this one by the repository's tests/test_docs_match_code.py: the package
+alone has no docs/.)
 """
 
 import re

@@ -1,0 +1,118 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Publish a message already serialized, from memory of our own: the middleware's copy only.
+
+rclpy's Publisher.publish() takes serialized bytes too (rclpy 3.3 on Humble and 7 on Jazzy),
+but only as a `bytes` object, which it copies again into a C++ string: a frame's bytes made
+twice more per message. `SerializedPublisher` hands rcl the bytes where they are instead:
+rcl_publish_serialized_message() (rcl's C API, the same on Humble and Jazzy) called through
+ctypes on the rcl publisher of an rclpy Publisher (its handle's `pointer`), from the librcl
+rclpy itself loaded, with the GIL released while the middleware sends. The publisher's handle
+is held meanwhile, as rclpy holds it in publish(), so that it cannot be destroyed under the
+call. Where this is not possible (no librcl in the process, an rclpy without `pointer`)
+`available` is False and the caller publishes messages as rclpy does.
+"""
+
+import ctypes
+from typing import Optional
+
+import numpy as np
+
+__all__ = ['SerializedPublisher']
+
+_RCL_RET_OK = 0
+
+
+class _Allocator(ctypes.Structure):
+    """rcutils_allocator_t: four functions and a state pointer (unused by publishing)."""
+
+    _fields_ = [('allocate', ctypes.c_void_p), ('deallocate', ctypes.c_void_p),
+                ('reallocate', ctypes.c_void_p), ('zero_allocate', ctypes.c_void_p),
+                ('state', ctypes.c_void_p)]
+
+
+class _SerializedMessage(ctypes.Structure):
+    """rcl_serialized_message_t (rcutils_uint8_array_t): the bytes, their length, capacity."""
+
+    _fields_ = [('buffer', ctypes.c_void_p), ('buffer_length', ctypes.c_size_t),
+                ('buffer_capacity', ctypes.c_size_t), ('allocator', _Allocator)]
+
+
+def _loaded_library(name: str) -> Optional[str]:
+    """Return the path of the shared library `name` (librcl.so) this process has loaded."""
+    try:
+        with open('/proc/self/maps') as maps:
+            for line in maps:
+                path = line.rstrip('\n').split(None, 5)[-1]
+                if path.rsplit('/', 1)[-1] == name:
+                    return path
+    except OSError:
+        pass
+    return None
+
+
+def _rcl_publish():
+    """Return rcl_publish_serialized_message from the process' librcl, or None."""
+    if not hasattr(_rcl_publish, 'function'):
+        function = None
+        path = _loaded_library('librcl.so')
+        if path is not None:
+            try:
+                function = ctypes.CDLL(path).rcl_publish_serialized_message
+            except (OSError, AttributeError):
+                function = None
+        if function is not None:
+            function.argtypes = [ctypes.c_void_p, ctypes.POINTER(_SerializedMessage),
+                                 ctypes.c_void_p]
+            function.restype = ctypes.c_int
+        _rcl_publish.function = function
+    return _rcl_publish.function
+
+
+class SerializedPublisher:
+    """
+    Publishes serialized messages (1-D uint8 arrays) through an rclpy Publisher's rcl one.
+
+    Made after rclpy is imported and the publisher created (librcl is loaded by then).
+    """
+
+    def __init__(self, publisher):
+        self.publisher = publisher
+        self._publish = _rcl_publish()
+        self._message = _SerializedMessage()
+        self._pointer = ctypes.byref(self._message)
+        handle = getattr(publisher, 'handle', None)
+        self.available = self._publish is not None and isinstance(
+            getattr(handle, 'pointer', None), int)
+
+    def publish(self, serialized: np.ndarray) -> None:
+        """
+        Publish a message's serialized bytes (contiguous uint8), read while this runs only.
+
+        RuntimeError when rcl refuses (the publisher destroyed, the bytes not a message);
+        the publisher's handle raises its own error once it is destroyed.
+        """
+        if not serialized.flags.c_contiguous or serialized.dtype != np.uint8:
+            raise ValueError('a serialized message is contiguous uint8 bytes')
+        message = self._message
+        message.buffer = serialized.ctypes.data
+        message.buffer_length = message.buffer_capacity = serialized.size
+        handle = self.publisher.handle
+        with handle:
+            status = self._publish(handle.pointer, self._pointer, None)
+        if status != _RCL_RET_OK:
+            raise RuntimeError('rcl_publish_serialized_message failed (%d) on %s' % (
+                status, self.publisher.topic_name))
