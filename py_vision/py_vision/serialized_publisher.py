@@ -30,8 +30,9 @@ import ctypes
 from typing import Optional
 
 import numpy as np
+from py_vision.serialized import SerializedStamped
 
-__all__ = ['SerializedPublisher']
+__all__ = ['SerializedPublisher', 'StampedPublisher']
 
 _RCL_RET_OK = 0
 
@@ -116,3 +117,24 @@ class SerializedPublisher:
         if status != _RCL_RET_OK:
             raise RuntimeError('rcl_publish_serialized_message failed (%d) on %s' % (
                 status, self.publisher.topic_name))
+
+
+class StampedPublisher:
+    """
+    Publishes messages that start with a std_msgs/Header through an rclpy Publisher.
+
+    Serialized once per message object and frame_id (SerializedStamped), the stamp written per
+    message; through rclpy where SerializedPublisher is not available. From one thread.
+    """
+
+    def __init__(self, publisher):
+        self.publisher = publisher
+        self._out = SerializedPublisher(publisher)
+        self._serialized = SerializedStamped()
+
+    def publish(self, msg) -> None:
+        """Publish msg (which must not change but for its header's stamp between calls)."""
+        if self._out.available:
+            self._out.publish(self._serialized.message(msg))
+        else:
+            self.publisher.publish(msg)

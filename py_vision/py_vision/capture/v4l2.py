@@ -163,6 +163,9 @@ class V4L2Device:
     def __init__(self, path: str, capture_only: bool = True):
         self.path = path
         self._kinds = {}   # control id -> kind, as controls() last found them
+        # (id, minimum, maximum, kind) -> a menu's entries: a control's menu is the driver's
+        # own table, asked for once while the device is open (controls() runs twice a second).
+        self._menus = {}
         try:
             self.fd = os.open(path, os.O_RDWR | os.O_NONBLOCK)
         except OSError as error:
@@ -294,7 +297,12 @@ class V4L2Device:
             if kind == BITMASK:   # the old ioctl's 32 bits are signed
                 high, default = high & 0xFFFFFFFF, default & 0xFFFFFFFF
             self._kinds[cid] = kind
-            menu = tuple(self._menu(cid, low, high, kind)) if kind in (MENU, INT_MENU) else ()
+            menu = ()
+            if kind in (MENU, INT_MENU):
+                key = (cid, low, high, kind)
+                menu = self._menus.get(key)
+                if menu is None:
+                    menu = self._menus[key] = tuple(self._menu(cid, low, high, kind))
             value = None
             if kind in SETTABLE and kind != BUTTON and not flags & CTRL_FLAG_WRITE_ONLY:
                 value = self.get_control(cid)
