@@ -92,13 +92,16 @@ class _Buffer:
     def __init__(self):
         self._memory = np.empty(0, np.uint8)
         self.message = self._memory    # the message's bytes: a view of _memory
+        self.address = self.size = 0   # where they are, and how many
 
     def place(self, size: int, aligned_at: int) -> np.ndarray:
         """Make room for a message of size bytes whose byte aligned_at falls on a boundary."""
         if self._memory.size < size + _DATA_ALIGNMENT:
             self._memory = np.zeros(size + _DATA_ALIGNMENT, np.uint8)
-        start = -(self._memory.ctypes.data + aligned_at) % _DATA_ALIGNMENT
+        base = self._memory.ctypes.data
+        start = -(base + aligned_at) % _DATA_ALIGNMENT
         self.message = self._memory[start:start + size]
+        self.address, self.size = base + start, size
         return self.message
 
 
@@ -109,7 +112,7 @@ class SerializedImage:
     Per message: `prepare(header, height, width, encoding, step, is_bigendian, size)` (a new
     layout only when one of them but the stamp changed, otherwise the stamp alone), then the
     pixels written into `data()` (`size` bytes: step x height unless said), then `message()`
-    is published.
+    is published (`where()`: its address and size, for SerializedPublisher.publish_at).
     """
 
     def __init__(self):
@@ -157,6 +160,10 @@ class SerializedImage:
         """Return the serialized bytes (1-D uint8) of the whole message, as it is now."""
         return self._buffer.message
 
+    def where(self) -> Tuple[int, int]:
+        """Return the address and size of message() (valid until the next layout)."""
+        return self._buffer.address, self._buffer.size
+
 
 class SerializedStamped:
     """
@@ -165,6 +172,7 @@ class SerializedStamped:
     `message(msg)` returns msg's serialized bytes with msg.header's stamp: serialized anew only
     when msg is another object than the last time or its frame_id changed. msg must not change
     otherwise between calls (CameraInfoManager replaces its messages, never changes them).
+    `stamp(msg)` does the same and returns where the bytes are (address, size).
     """
 
     def __init__(self):
@@ -174,14 +182,19 @@ class SerializedStamped:
 
     def message(self, msg) -> np.ndarray:
         """Return the bytes of msg serialized (1-D uint8), with its header's current stamp."""
+        self.stamp(msg)
+        return self._buffer.message
+
+    def stamp(self, msg) -> Tuple[int, int]:
+        """Serialize msg (or only write its stamp); return the bytes' address and size."""
         header = msg.header
+        buffer = self._buffer
         if msg is not self._source or header.frame_id != self._frame_id:
             from rclpy.serialization import serialize_message
             serialized = serialize_message(msg)
             self._source = None
-            message = self._buffer.place(len(serialized), 0)
+            message = buffer.place(len(serialized), 0)
             message[:] = np.frombuffer(serialized, np.uint8)
             self._source, self._frame_id = msg, header.frame_id
-        message = self._buffer.message
-        _STAMP.pack_into(message, STAMP_OFFSET, *_stamp_values(header.stamp))
-        return message
+        _STAMP.pack_into(buffer.message, STAMP_OFFSET, *_stamp_values(header.stamp))
+        return buffer.address, buffer.size

@@ -95,25 +95,34 @@ class SerializedPublisher:
         self._publish = _rcl_publish()
         self._message = _SerializedMessage()
         self._pointer = ctypes.byref(self._message)
-        handle = getattr(publisher, 'handle', None)
-        self.available = self._publish is not None and isinstance(
-            getattr(handle, 'pointer', None), int)
+        self._where = (0, 0)
+        self._handle = getattr(publisher, 'handle', None)
+        rcl_publisher = getattr(self._handle, 'pointer', None)
+        self.available = self._publish is not None and isinstance(rcl_publisher, int)
+        # The rcl publisher stays where it is until it is destroyed, which its handle, held
+        # during each call, says first (rclpy's InvalidHandle).
+        self._rcl_publisher = ctypes.c_void_p(rcl_publisher) if self.available else None
 
     def publish(self, serialized: np.ndarray) -> None:
         """
         Publish a message's serialized bytes (contiguous uint8), read while this runs only.
 
-        RuntimeError when rcl refuses (the publisher destroyed, the bytes not a message);
-        the publisher's handle raises its own error once it is destroyed.
+        RuntimeError when rcl refuses (the bytes not a message); the publisher's handle raises
+        its own error once it is destroyed.
         """
         if not serialized.flags.c_contiguous or serialized.dtype != np.uint8:
             raise ValueError('a serialized message is contiguous uint8 bytes')
-        message = self._message
-        message.buffer = serialized.ctypes.data
-        message.buffer_length = message.buffer_capacity = serialized.size
-        handle = self.publisher.handle
-        with handle:
-            status = self._publish(handle.pointer, self._pointer, None)
+        self.publish_at(serialized.ctypes.data, serialized.size)
+
+    def publish_at(self, address: int, size: int) -> None:
+        """Publish the serialized message of size bytes at address (as publish())."""
+        if (address, size) != self._where:
+            message = self._message
+            message.buffer = address
+            message.buffer_length = message.buffer_capacity = size
+            self._where = (address, size)
+        with self._handle:
+            status = self._publish(self._rcl_publisher, self._pointer, None)
         if status != _RCL_RET_OK:
             raise RuntimeError('rcl_publish_serialized_message failed (%d) on %s' % (
                 status, self.publisher.topic_name))
@@ -135,6 +144,6 @@ class StampedPublisher:
     def publish(self, msg) -> None:
         """Publish msg (which must not change but for its header's stamp between calls)."""
         if self._out.available:
-            self._out.publish(self._serialized.message(msg))
+            self._out.publish_at(*self._serialized.stamp(msg))
         else:
             self.publisher.publish(msg)

@@ -168,7 +168,7 @@ class ImagePublisher:
             out = self._pixels_out(header)
             pixels = into(out)
             if pixels is out:
-                self._serialized.publish(self._image.message())
+                self._serialized.publish_at(*self._image.where())
                 return True
         else:
             pixels = image()
@@ -177,7 +177,7 @@ class ImagePublisher:
         self._lay_out(pixels, encoding)
         out = self._pixels_out(header)
         np.copyto(out, pixels)
-        self._serialized.publish(self._image.message())
+        self._serialized.publish_at(*self._image.where())
         return True
 
     def _lay_out(self, pixels: np.ndarray, encoding: str) -> None:
