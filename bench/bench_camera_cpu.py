@@ -16,7 +16,7 @@
 The camera node's CPU against the C++ drivers', side by side on one emulated USB camera.
 
   .venv/bin/python bench/bench_camera_cpu.py [--modes 640x480@30,1280x720@10] [--rounds 3]
-      [--window 20] [--cases ...]
+      [--window 20] [--cases ...] [--before INSTALL_BASE] [--tag TAG]
   . scripts/board_env.sh && python bench/bench_camera_cpu.py      (the boards' versions)
 
 The emulated 1080p USB 2.0 webcam of the tests (docs/emulated_cameras.md) streams YUYV at each
@@ -45,8 +45,10 @@ anything, and a row that falls short says so. The camera is plugged in anew befo
 (a driver inherits no format from the one before). The cases alternate within each round
 (each round in another order); the table gives medians over the rounds, and the ratios are
 py_vision's median over each peer's (profile), and in brackets the median of each round's
-own ratio. Prints a Markdown table and writes
-bench/results/camera_cpu-py<version>.json. The C++ drivers need Debian's
+own ratio. With --before, another build of py_vision (the colcon install of main's code, say,
+built with that environment's colcon) runs in the same rounds, and "x before" is this build
+against it. Prints a Markdown table and writes
+bench/results/camera_cpu-py<version>[-TAG].json. The C++ drivers need Debian's
 libopencv-core406 libopencv-imgproc406 libopencv-imgcodecs406 libavcodec59 libavutil57
 libswscale6 libconsole-bridge1.0 libyaml-cpp0.7 (the run says which are missing).
 """
@@ -70,6 +72,8 @@ import ros_harness
 MODES = '640x480@30,1280x720@10'
 CASES = ('py_vision bgr8', 'py_vision native', 'v4l2_camera', 'v4l2_camera (profile)',
          'usb_cam', 'usb_cam (profile)')
+# With --before: the same two cases run from another build of py_vision (its colcon install).
+BEFORE = ('py_vision bgr8 (before)', 'py_vision native (before)')
 PEERS = ('v4l2_camera (profile)', 'usb_cam (profile)')
 CAMERA_NODE = 47
 START_S = 60.0
@@ -149,13 +153,30 @@ def profiles_for(width, height):
             'subscriber': dds.tailor(packaged, segment, localhost=True)}
 
 
+def installed_env_of(base):
+    """Return the environment of the py_vision installed in the colcon install base `base`."""
+    setup = Path(base) / 'setup.bash'
+    if not (Path(base) / 'py_vision' / 'lib' / 'py_vision' / 'usbcam_publisher').is_file():
+        raise SystemExit('%s holds no installed py_vision (a colcon install base)' % base)
+    out = subprocess.run(['bash', '-c', 'source "$0" && env -0', str(setup)],
+                         capture_output=True, check=True).stdout
+    env = dict(item.split('=', 1) for item in out.decode().split('\0') if '=' in item)
+    env.update(ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', PYTHONUNBUFFERED='1',
+               RCUTILS_COLORIZED_OUTPUT='0', PY_VISION_INSTALL=str(base))
+    env.pop('ROS_LOCALHOST_ONLY', None)
+    return env
+
+
 def driver_command(case, device, width, height, fps, peers):
     """Return the driver's command line for a case."""
     if case.startswith('py_vision'):
-        return [str(ros_harness.EXECUTABLES / 'usbcam_publisher')] + ros_harness.ros_args({
+        executables = ros_harness.EXECUTABLES
+        if case in BEFORE:
+            executables = Path(peers['before']) / 'py_vision' / 'lib' / 'py_vision'
+        return [str(executables / 'usbcam_publisher')] + ros_harness.ros_args({
             'video_device': device, 'image_width': width, 'image_height': height,
             'framerate': fps, 'pixel_format': 'yuyv',
-            'output_encoding': case.split()[-1]})
+            'output_encoding': case.split()[2]})
     if case.startswith('v4l2_camera'):
         return [peers['v4l2_camera'], '--ros-args', '-p', 'video_device:=%s' % device,
                 '-p', 'image_size:=[%d,%d]' % (width, height),
@@ -173,7 +194,8 @@ def run_case(case, mode, camera, envs, peers, window, workdir):
     # that sets the rate before the size, as v4l2_camera does, would keep the last rate).
     camera.replug()
     domain = ros_harness.DomainId()
-    env = camera.env(dict(envs['ours' if ours else 'humble'], ROS_DOMAIN_ID=str(domain.value)))
+    which = 'before' if case in BEFORE else 'ours' if ours else 'humble'
+    env = camera.env(dict(envs[which], ROS_DOMAIN_ID=str(domain.value)))
     for name in ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE',
                  'RMW_IMPLEMENTATION'):
         env.pop(name, None)
@@ -256,6 +278,9 @@ def summarise(results, modes, cases):
                 'kept_up': all(min(r['delivered_fps'], r['captured_fps'])
                                >= DELIVERED_MIN * fps for r in runs)}
         for row in by_case.values():
+            before = by_case.get(row['case'] + ' (before)')
+            if before and before['cpu_percent']:
+                row['x before'] = round(row['cpu_percent'] / before['cpu_percent'], 2)
             for peer in PEERS:
                 base = by_case.get(peer)
                 if base and base['cpu_percent'] and row['case'] not in PEERS:
@@ -268,18 +293,19 @@ def summarise(results, modes, cases):
 
 def print_table(rows, loads):
     print('\n| mode | driver | encoding | delivered fps | CPU, % of a core | CPU a frame | '
-          'x v4l2_camera (profile) | x usb_cam (profile) |')
-    print('|---|---|---|---:|---:|---:|---:|---:|')
+          'x v4l2_camera (profile) | x usb_cam (profile) | x before |')
+    print('|---|---|---|---:|---:|---:|---:|---:|---:|')
     for r in rows:
         ratios = []
         for peer in PEERS:
             ratios.append('%.2f (%.2f)' % (r['x ' + peer], r['x %s, per round' % peer])
                           if 'x ' + peer in r else '-')
-        print('| %s | %s | %s | %.1f%s | %.2f | %.3f ms | %s | %s |' % (
+        print('| %s | %s | %s | %.1f%s | %.2f | %.3f ms | %s | %s | %s |' % (
             r['mode'], r['case'], r['encoding'], r['delivered_fps'],
             '' if r['kept_up'] else ' (short)', r['cpu_percent'], r['cpu_ms_per_frame'] or 0,
-            *ratios))
-    print('\nratios: the medians\' ratio (the median of each round\'s own ratio)')
+            *ratios, r.get('x before', '-')))
+    print("\nratios: the medians' ratio (the median of each round's own ratio); x before: "
+          'against the same case of the --before build')
     print('\nload average (1 min) during the run: %.1f to %.1f on %d CPUs' % (
         min(loads), max(loads), os.cpu_count()))
 
@@ -289,8 +315,11 @@ def main():
     parser.add_argument('--modes', default=MODES, help='WxH@fps,... (%s)' % MODES)
     parser.add_argument('--rounds', type=int, default=3, help='rounds (3)')
     parser.add_argument('--window', type=float, default=20.0, help='window, s (20)')
-    parser.add_argument('--cases', nargs='+', default=list(CASES), choices=CASES,
+    parser.add_argument('--cases', nargs='+', default=list(CASES), choices=CASES + BEFORE,
                         help='cases (all)')
+    parser.add_argument('--before', metavar='INSTALL_BASE',
+                        help="another build's colcon install (e.g. main's): its usbcam_publisher "
+                        'runs too, as "py_vision bgr8 (before)" and "py_vision native (before)"')
     parser.add_argument('--tag', default='', help='added to the results file name')
     args = parser.parse_args()
     modes = parse_modes(args.modes)
@@ -299,6 +328,10 @@ def main():
     envs['humble'].update(PYTHONUNBUFFERED='1', RCUTILS_COLORIZED_OUTPUT='0')
     peers = peer_executables(envs['humble']) if any(
         not case.startswith('py_vision') for case in args.cases) else {}
+    if args.before:
+        envs['before'] = installed_env_of(os.path.abspath(args.before))
+        peers['before'] = os.path.abspath(args.before)
+        args.cases += [case for case in BEFORE if case not in args.cases]
     state = tempfile.mkdtemp(prefix='bench_camera_cpu_')
     camera = EmulatedCamera(state, 'webcam_1080p', CAMERA_NODE)
     results, loads = [], []

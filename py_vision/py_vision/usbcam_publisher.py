@@ -62,7 +62,7 @@ from py_vision.capture.pixel_formats import find, names_accepted, OUTPUTS
 from py_vision.control_names import pixel_format_fourcc, USB_CAM_PIXEL_FORMATS
 from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
-from py_vision.diagnostics import Diagnostics
+from py_vision.diagnostics import Diagnostics, PERIOD_S as DIAGNOSTICS_PERIOD_S
 from py_vision.listing import device_listing, devices_listing
 from py_vision.node_main import ConfigError, main_for
 from py_vision.params import Parameters, Spec
@@ -83,8 +83,11 @@ MANAGED = Spec('managed', False, 'run as a lifecycle node: configure opens the c
                'releases the camera and the publishers (ros2 lifecycle set)')
 SUCCESS = TransitionCallbackReturn.SUCCESS
 FAILURE = TransitionCallbackReturn.FAILURE
-# How often the control parameters are brought up to date with the device's values.
+# How often the control parameters are brought up to date with the device's values; every
+# DIAGNOSTICS_TICKS-th time /diagnostics is published too (once a second): one timer, one
+# executor wake-up for both (a wake-up of rclpy's executor costs this node more than either).
 CONTROL_SYNC_PERIOD_S = 0.5
+DIAGNOSTICS_TICKS = round(DIAGNOSTICS_PERIOD_S / CONTROL_SYNC_PERIOD_S)
 # After shutdown the process ends this much later, once the answer to the transition request
 # has gone out (ending rclpy at once could lose it, and `ros2 lifecycle set` would wait).
 EXIT_AFTER_SHUTDOWN_S = 0.5
@@ -218,8 +221,11 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         self._monitor = CameraMonitor()
         self._clock = self.get_clock()
         self._header = Header(frame_id=self.frame_id)
-        self.diagnostics = Diagnostics(self._params, hardware_id=self.video_device)
+        self.diagnostics = Diagnostics(self._params, hardware_id=self.video_device,
+                                       period_s=None)
         self.diagnostics.add('camera', self.camera_status)
+        self._ticks = 0
+        self.create_timer(CONTROL_SYNC_PERIOD_S, self._tick)
 
     def _make_publishers(self):
         """Create the image, compressed and camera_info publishers."""
@@ -249,7 +255,16 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
                                      self.video_device)
         controls.declare(set(self.values))  # ConfigError: a mistyped value, declared nothing
         self.controls = controls
-        self.create_timer(CONTROL_SYNC_PERIOD_S, self.controls.sync)
+
+    def _tick(self):
+        """Bring the control parameters up to date (once configured); publish /diagnostics."""
+        self._ticks += 1
+        try:
+            if self.controls is not None:
+                self.controls.sync()
+        finally:
+            if self._ticks % DIAGNOSTICS_TICKS == 0:
+                self.diagnostics.publish()
 
     def _controls_refused(self, refusals):
         """Say which controls a reopened camera did not take again (the capture loop's)."""
