@@ -176,7 +176,7 @@ def driver_command(case, device, width, height, fps, peers):
         return [str(executables / 'usbcam_publisher')] + ros_harness.ros_args({
             'video_device': device, 'image_width': width, 'image_height': height,
             'framerate': fps, 'pixel_format': 'yuyv',
-            'output_encoding': case.split()[2]})
+            'output_encoding': case.split()[1]})
     if case.startswith('v4l2_camera'):
         return [peers['v4l2_camera'], '--ros-args', '-p', 'video_device:=%s' % device,
                 '-p', 'image_size:=[%d,%d]' % (width, height),
@@ -208,10 +208,10 @@ def run_case(case, mode, camera, envs, peers, window, workdir):
     topic = 'usb_camera/image' if ours else 'image_raw'
     python = os.path.join(sub_env['VIRTUAL_ENV'], 'bin', 'python') if not ours and (
         sub_env.get('VIRTUAL_ENV')) else sys.executable
+    cmd = driver_command(case, camera.device, width, height, fps, peers)
     subscriber = start_helper('subscriber', [
         python, str(BENCH / 'bare_image_subscriber.py'), '{out}', 'best_effort',
         '--ros-args', '-r', 'usb_camera/image:=%s' % topic], sub_env, workdir)
-    cmd = driver_command(case, camera.device, width, height, fps, peers)
     driver = ros_harness.NodeProcess(cmd[0], cmd[1:], env, name='driver', log_dir=workdir)
     processes = [driver, subscriber]
     try:
