@@ -47,8 +47,10 @@ anything, and a row that falls short says so. The camera is plugged in anew befo
 py_vision's median over each peer's (profile), and in brackets the median of each round's
 own ratio. With --before, another build of py_vision (the colcon install of main's code, say,
 built with that environment's colcon) runs in the same rounds, and "x before" is this build
-against it. Prints a Markdown table and writes
-bench/results/camera_cpu-py<version>[-TAG].json. The C++ drivers need Debian's
+against it. With --floor, the least a Python driver does per frame (bench/camera_floor.py: read,
+convert into the serialized message, publish it and the CameraInfo) runs too, as bgr8 and
+native: what usbcam_publisher costs above it is the node's own. Prints a Markdown table and
+writes bench/results/camera_cpu-py<version>[-TAG].json. The C++ drivers need Debian's
 libopencv-core406 libopencv-imgproc406 libopencv-imgcodecs406 libavcodec59 libavutil57
 libswscale6 libconsole-bridge1.0 libyaml-cpp0.7 (the run says which are missing).
 """
@@ -74,6 +76,8 @@ CASES = ('py_vision bgr8', 'py_vision native', 'v4l2_camera', 'v4l2_camera (prof
          'usb_cam', 'usb_cam (profile)')
 # With --before: the same two cases run from another build of py_vision (its colcon install).
 BEFORE = ('py_vision bgr8 (before)', 'py_vision native (before)')
+# With --floor: the least a Python driver does per frame (bench/camera_floor.py).
+FLOOR = ('python floor bgr8', 'python floor native')
 PEERS = ('v4l2_camera (profile)', 'usb_cam (profile)')
 CAMERA_NODE = 47
 START_S = 60.0
@@ -169,6 +173,9 @@ def installed_env_of(base):
 
 def driver_command(case, device, width, height, fps, peers):
     """Return the driver's command line for a case."""
+    if case in FLOOR:
+        return [sys.executable, str(BENCH / 'camera_floor.py'), device, str(width), str(height),
+                repr(fps), case.split()[2]]
     if case.startswith('py_vision'):
         executables = ros_harness.EXECUTABLES
         if case in BEFORE:
@@ -189,7 +196,7 @@ def driver_command(case, device, width, height, fps, peers):
 def run_case(case, mode, camera, envs, peers, window, workdir):
     """Run one driver and its subscriber; return the driver's CPU and the delivered rate."""
     width, height, fps = mode
-    ours = case.startswith('py_vision')
+    ours = case.startswith(('py_vision', 'python floor'))
     # Plugged in anew: the format and rate the last driver left on the device go (a driver
     # that sets the rate before the size, as v4l2_camera does, would keep the last rate).
     camera.replug()
@@ -315,8 +322,10 @@ def main():
     parser.add_argument('--modes', default=MODES, help='WxH@fps,... (%s)' % MODES)
     parser.add_argument('--rounds', type=int, default=3, help='rounds (3)')
     parser.add_argument('--window', type=float, default=20.0, help='window, s (20)')
-    parser.add_argument('--cases', nargs='+', default=list(CASES), choices=CASES + BEFORE,
-                        help='cases (all)')
+    parser.add_argument('--cases', nargs='+', default=list(CASES),
+                        choices=CASES + BEFORE + FLOOR, help='cases (all)')
+    parser.add_argument('--floor', action='store_true',
+                        help='also the least a Python driver does (bench/camera_floor.py)')
     parser.add_argument('--before', metavar='INSTALL_BASE',
                         help="another build's colcon install (e.g. main's): its usbcam_publisher "
                         'runs too, as "py_vision bgr8 (before)" and "py_vision native (before)"')
@@ -332,6 +341,8 @@ def main():
         envs['before'] = installed_env_of(os.path.abspath(args.before))
         peers['before'] = os.path.abspath(args.before)
         args.cases += [case for case in BEFORE if case not in args.cases]
+    if args.floor:
+        args.cases += [case for case in FLOOR if case not in args.cases]
     state = tempfile.mkdtemp(prefix='bench_camera_cpu_')
     camera = EmulatedCamera(state, 'webcam_1080p', CAMERA_NODE)
     results, loads = [], []
