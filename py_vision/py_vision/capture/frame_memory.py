@@ -16,10 +16,11 @@
 """
 Frame-sized buffers kept by the C allocator instead of given back to the system every frame.
 
-Every frame the capture thread allocates and frees buffers of a frame's size (a decoded image,
-a message's data). glibc serves blocks that large from mmap, or trims its thread arena's heap
-once they are freed, so each new frame starts on memory the system has to fault in again, page
-by page: about 0.4 ms of CPU for each 640x480 BGR image decoded (bench/bench_capture.py). With
+Every frame the capture thread may allocate and free buffers of a frame's size (a decoded
+JPEG; where the image cannot go out serialized, a converted image and the C message rclpy
+fills). glibc serves blocks that large from mmap, or trims its thread arena's heap once they
+are freed, so each new frame starts on memory the system has to fault in again, page by page:
+about 0.4 ms of CPU for each 640x480 BGR image decoded (bench/bench_capture.py). With
 the mmap threshold above a frame and the trim threshold above a few frames, freed frames are
 reused. Process-wide and harmless elsewhere; nothing is done where the C library is not glibc.
 """
