@@ -36,6 +36,7 @@ from typing import Callable, Optional, Tuple
 import cv2
 import numpy as np
 from py_vision.cv_bridge import fill_message_data, share_message_data
+from py_vision.frame_memory import FrameStream
 from py_vision.params import Parameters, Spec
 from py_vision.qos import create_publisher, ImageSubscription
 from py_vision.throttled_log import ThrottledLog
@@ -194,17 +195,24 @@ def image_bytes(msg) -> int:
 
 
 class _SizeLimit:
-    """A subscription's callback that refuses images over max_bytes before anything else."""
+    """
+    A subscription's callback that refuses images over max_bytes before anything else.
+
+    The frames it lets through are counted by size (frame_memory.FrameStream): the process
+    keeps the memory of a stream's frames for the next ones.
+    """
 
     def __init__(self, node, callback, max_bytes: float):
         self._callback = callback
         self._max_bytes = max_bytes
         self._log = ThrottledLog(node.get_logger())
+        self._frames = FrameStream()
         self.subscription: Optional[ImageSubscription] = None
 
     def __call__(self, msg):
         size = image_bytes(msg)
         if size <= self._max_bytes:
+            self._frames.frame(size)
             self._callback(msg)
             return
         what = '%dx%d %s' % (msg.width, msg.height, msg.encoding) if isinstance(
