@@ -55,7 +55,7 @@ print((resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before) / 20.0)
 """
 
 glibc = pytest.mark.skipif(platform.libc_ver()[0] != 'glibc',
-                           reason='the setting is mallopt, which only glibc has; elsewhere nothing is done')
+                           reason='the setting is mallopt, which only glibc has')
 
 
 def faults_a_frame(size, how):
