@@ -42,6 +42,9 @@ _MMAP_THRESHOLD_MAX = 32 * 1024 * 1024   # glibc's largest on 64-bit machines
 # at its top are kept. A message taken by a subscription is, for a moment, three blocks of
 # its size (the middleware's, rclpy's bytes and the message's array), all freed at the top.
 MMAP_FRAMES, TRIM_FRAMES = 2, 4
+# glibc's own thresholds to begin with (which it raises itself as blocks are freed): frames
+# too small to need more are left to it.
+_DEFAULT_THRESHOLD = 128 * 1024
 _state = {'kept': 0, 'libc': None}
 
 
@@ -58,8 +61,8 @@ def _libc():
 
 def keep_buffers(frame: int) -> bool:
     """Keep freed buffers of `frame` bytes (or fewer) for reuse; True if they are kept."""
-    if frame <= _state['kept']:
-        return True
+    if frame <= _state['kept'] or MMAP_FRAMES * frame <= _DEFAULT_THRESHOLD:
+        return True  # kept already, or small enough for glibc's own thresholds
     try:
         libc = _libc()
         if not libc:

@@ -231,10 +231,11 @@ def subscribe(node, base_topic: str, transport: str, callback, depth: int = 10,
     With a video transport (VIDEO_TRANSPORTS) it reads the camera's own access units:
     CompressedVideo on ``T/foxglove``, CompressedImage on ``T/h264`` or ``T/h265``; ValueError
     when foxglove is asked for and foxglove_msgs is not installed. The subscription hears
-    reliable and best-effort publishers alike (qos.ImageSubscription). An image over
-    max_image_mb (of pixels, or of compressed data) never reaches callback: it is one
-    rate-limited warning, and the subscription is made anew so that the memory the middleware
-    took for it is given back.
+    reliable and best-effort publishers alike (qos.ImageSubscription) and takes its frames on
+    a thread of its own, where callback runs (not the executor's); close() it before the node
+    is destroyed. An image over max_image_mb (of pixels, or of compressed data) never reaches
+    callback: it is one rate-limited warning, and the subscription is made anew so that the
+    memory the middleware took for it is given back.
     """
     limit = _SizeLimit(node, callback, max_image_mb * 1e6)
     if transport in VIDEO_TRANSPORTS:

@@ -29,14 +29,17 @@ also shown, like the subscriber shows its own.
 
 The processing runs on a LatestFrameWorker, not in the subscription callback: a step slower
 than the camera works on the newest frame and counts the ones it skips, instead of working
-through a backlog of old frames. docs/processing.md explains it. cv_bridge_test is this node
-running the `circle` step under its own name and topic.
+through a backlog of old frames. docs/processing.md explains it. The frames are taken on the
+subscription's own thread (transport.subscribe), which offers them to the worker; the
+executor runs the rest. cv_bridge_test is this node running the `circle` step under its own
+name and topic.
 
-At stop (close()), in this order: what the step publishes through its context from the worker
-thread is dropped from then on (StepPublishers); the worker is given STOP_GRACE_S to finish
-the frame under way, then abandoned (the step is never called again); the step's close()
-publishes its last messages (hand_signs: a zero command); the node waits up to
-DELIVERY_TIMEOUT_S for reliable subscribers to acknowledge them; run() destroys the node.
+At stop (close()), in this order: no frame is taken any more; what the step publishes
+through its context from the worker thread is dropped from then on (StepPublishers); the
+worker is given STOP_GRACE_S to finish the frame under way, then abandoned (the step is never
+called again); the step's close() publishes its last messages (hand_signs: a zero command);
+the node waits up to DELIVERY_TIMEOUT_S for reliable subscribers to acknowledge them; run()
+destroys the node.
 """
 
 import dataclasses
@@ -240,7 +243,7 @@ class VisionStep(Node):
     NODE_PARAMETERS: Tuple[Spec, ...] = INPUT_SPECS + STEP_SPECS
     PARAMETERS: Tuple[Spec, ...] = NODE_PARAMETERS
 
-    worker = display = None  # what close() finds when start-up was interrupted
+    worker = display = subscription_ = None  # what close() finds when start-up was interrupted
     step_publishers: Optional[StepPublishers] = None
     step: Optional[ProcessesFrames] = None
     failed = False           # it never stops of an error of its own
@@ -474,6 +477,8 @@ class VisionStep(Node):
         The step's close() has the last word on its publishers, and what it sends there is
         waited for (the module's docstring says in which order).
         """
+        if self.subscription_ is not None:
+            self.subscription_.close()  # no frame is offered any more
         if self.step_publishers is not None:
             self.step_publishers.stop()
         if self.worker is not None and not self.worker.close(STOP_GRACE_S):
