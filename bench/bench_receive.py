@@ -32,8 +32,9 @@ runs in a process of its own, and each receiver in turn subscribes to it:
 A receiver's cost is its CPU (utime + stime of the whole process, /proc) over a window divided
 by the frames it received in that window: the bare subscriber's own records, the nodes' frame
 counts from their /diagnostics (the window runs from one report to a later one, the CPU read as
-each arrives). Minor page faults per frame (a frame's memory given back to the system and
-faulted in again) and the resident memory at the window's end go with it. Rounds alternate the
+each arrives). The part of it spent in the kernel, minor page faults per frame (a frame's
+memory given back to the system and faulted in again) and the resident memory at the window's
+end go with it. Rounds alternate the
 receivers (the order turns each round); the table gives medians over the rounds and, per node,
 the median of its ratios to the bare subscriber of the same round. Writes
 bench/results/receive-py<version>.json (the boards' Python 3.10 in the board-version
@@ -63,13 +64,13 @@ COUNTS = {'usbcam_subscriber': ('stream', 'frames'), 'vision_step': ('processing
 
 
 def process_stat(pid):
-    """Return (utime + stime in ticks, minor faults) of a process, or None when it is gone."""
+    """Return (utime + stime, stime in ticks, minor faults) of a process, or None if gone."""
     try:
         with open('/proc/%d/stat' % pid) as stream:
             fields = stream.read().rsplit(')', 1)[1].split()
     except OSError:
         return None
-    return int(fields[11]) + int(fields[12]), int(fields[7])
+    return int(fields[11]) + int(fields[12]), int(fields[12]), int(fields[7])
 
 
 def rss_mib(pid):
@@ -190,11 +191,13 @@ def measure(receiver, size, window, env, workdir, reports, log=print):
         frames = sum(1 for record in received if start[0] <= record[0] < end[0])
     else:
         frames = end[1] - start[1]
-    ticks, faults = end[2][0] - start[2][0], end[2][1] - start[2][1]
+    ticks, system, faults = (b - a for a, b in zip(start[2], end[2]))
     result.update(frames=frames, seconds=round(seconds, 3),
                   fps=round(frames / seconds, 2),
                   cpu_percent=round(100.0 * ticks / CLK_TCK / seconds, 2),
                   cpu_ms_per_frame=round(1000.0 * ticks / CLK_TCK / frames, 3) if frames
+                  else None,
+                  system_ms_per_frame=round(1000.0 * system / CLK_TCK / frames, 3) if frames
                   else None,
                   faults_per_frame=round(faults / frames, 1) if frames else None)
     return result
@@ -248,6 +251,7 @@ def summarise(runs, receivers):
                 'size': key[0], 'target_fps': key[1], 'receiver': receiver,
                 'rounds': len(mine),
                 'cpu_ms_per_frame': median([r['cpu_ms_per_frame'] for r in mine]),
+                'system_ms_per_frame': median([r['system_ms_per_frame'] for r in mine]),
                 'ratio_to_bare': round(statistics.median(ratios), 3) if ratios else None,
                 'ratios': [round(ratio, 3) for ratio in ratios],
                 'fps': median([r['fps'] for r in mine]),
@@ -267,14 +271,15 @@ def fmt(value, digits=2):
 
 
 def table(rows):
-    lines = ['| size | fps | receiver | CPU ms a frame | ratio to bare | faults a frame | '
-             'received fps | RSS MiB | rounds |',
-             '|---|---:|---|---:|---:|---:|---:|---:|---:|']
+    lines = ['| size | fps | receiver | CPU ms a frame | of which kernel | ratio to bare | '
+             'faults a frame | received fps | RSS MiB | rounds |',
+             '|---|---:|---|---:|---:|---:|---:|---:|---:|---:|']
     for row in rows:
-        lines.append('| %s | %g | %s | %s | %s | %s | %s | %s | %d |' % (
+        lines.append('| %s | %g | %s | %s | %s | %s | %s | %s | %s | %d |' % (
             row['size'], row['target_fps'], row['receiver'], fmt(row['cpu_ms_per_frame']),
-            fmt(row['ratio_to_bare']), fmt(row['faults_per_frame'], 0), fmt(row['fps'], 1),
-            fmt(row['rss_mib'], 1), row['rounds']))
+            fmt(row['system_ms_per_frame']), fmt(row['ratio_to_bare']),
+            fmt(row['faults_per_frame'], 0), fmt(row['fps'], 1), fmt(row['rss_mib'], 1),
+            row['rounds']))
     return '\n'.join(lines)
 
 
