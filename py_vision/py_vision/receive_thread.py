@@ -26,14 +26,17 @@ The subscription is created in `callback_group`, whose entities the executor nev
 or runs (its QoS events are not handled either: nobody is told of an incompatible publisher,
 as with a handler that does nothing). Its callback runs on the receive thread: what it shares
 with the executor's callbacks it must guard. A callback that raises is logged like one of the
-executor's (callback_failures), and the next message is taken.
+executor's (callback_failures), and the next message is taken. How a message is taken may be
+given (`take`: a sensor_msgs/Image serialized, read without copying its pixels again); a
+message that cannot be taken is one rate-limited warning, and the next is taken.
 """
 
 import threading
 import time
-from typing import Callable, Optional
+from typing import Any, Callable, Optional
 
 from py_vision.callback_failures import CallbackFailures
+from py_vision.throttled_log import ThrottledLog
 from rclpy.callback_groups import CallbackGroup
 from rclpy.exceptions import InvalidHandle
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
@@ -72,10 +75,19 @@ class ReceiveThread:
     """
 
     def __init__(self, node, name: str = 'receive',
-                 on_error: Optional[Callable[[Exception], None]] = None):
+                 on_error: Optional[Callable[[Exception], None]] = None,
+                 take: Optional[Callable[[Any], Any]] = None):
+        """
+        Make the thread (it starts with the first follow()).
+
+        take(subscription) returns the subscription's next message, or None (default: as
+        rclpy takes it); on_error(error) records what a callback raised (default: logged).
+        """
         self.callback_group = OwnThread()
         self._context = node.context
         self._on_error = on_error or CallbackFailures(node.get_logger()).record
+        self._take_one = take or _rclpy_take
+        self._log = ThrottledLog(node.get_logger())
         self._wake = node.create_guard_condition(lambda: None, self.callback_group)
         self._cond = threading.Condition()
         self._subscription = None   # the one to take from, None while released
@@ -144,10 +156,12 @@ class ReceiveThread:
                 if subscription is self._subscription:
                     return  # destroyed and neither released nor replaced: the node is gone
                 continue
-            except Exception as error:  # noqa: B902 - rcl's own (a message it cannot take)
+            except Exception as error:  # noqa: B902 - a message that cannot be taken or read
                 if self._closing or not self._context.ok():
                     return  # shut down under the thread
-                self._on_error(error)
+                self._log.warning(type(error).__name__, 'a message on %s could not be taken, '
+                                  'skipped: %s: %s' % (subscription.topic_name,
+                                                       type(error).__name__, error))
                 time.sleep(ERROR_PAUSE_S)
                 continue
             if message is None:
@@ -168,5 +182,10 @@ class ReceiveThread:
             wait_set.wait(CHECK_PERIOD_NS)
             if not wait_set.is_ready('subscription', 0):
                 return None
-            taken = subscription.handle.take_message(subscription.msg_type, subscription.raw)
-        return None if taken is None else taken[0]
+            return self._take_one(subscription)
+
+
+def _rclpy_take(subscription):
+    """Return the subscription's next message as rclpy takes it, or None (its handle held)."""
+    taken = subscription.handle.take_message(subscription.msg_type, subscription.raw)
+    return None if taken is None else taken[0]
