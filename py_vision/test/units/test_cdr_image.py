@@ -66,8 +66,11 @@ def fields(msg):
             msg.width, msg.encoding, msg.is_bigendian, msg.step, bytes(msg.data))
 
 
-@pytest.mark.parametrize('msg', CASES, ids=lambda m: '%dx%d %s' % (m.width, m.height,
-                                                                     m.encoding or 'empty'))
+def case_name(msg):
+    return '%dx%d %s' % (msg.width, msg.height, msg.encoding or 'empty')
+
+
+@pytest.mark.parametrize('msg', CASES, ids=case_name)
 def test_every_field_reads_as_rclpy_deserialises_it(msg):
     serialized = serialize_message(msg)
     expected = deserialize_message(serialized, Image)
