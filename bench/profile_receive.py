@@ -13,20 +13,20 @@
 # limitations under the License.
 
 """
-Where a received frame's CPU goes, in one receiver of bench_receive.py: threads and functions.
+Where a received frame's CPU goes, in one receiver of bench_receive.py: threads and code.
 
   .venv/bin/python bench/profile_receive.py RECEIVER [--size 640x480] [--seconds 20]
-      [--py-spy PATH]
 
 RECEIVER is one of bench_receive.py's (bare, usbcam_subscriber, 'vision_step nothing', ...),
-fed by the same bare publisher at 30 fps. Over the window: each thread's CPU (user and kernel)
-a frame, from /proc/PID/task, the Python threads named by `py-spy dump`, the others (Fast
-DDS') grouped; and, from `py-spy record --native` samples of the Python threads, what their
-CPU went to: the executor's own Python, the middleware's take and deserialisation, rclpy's
-conversion of the C message to Python, the node's callback, the receive thread's loop.
-py-spy is not a dependency of the project: `pip install py-spy` (a PyPI wheel), or give its
-path. Frames are counted at the publisher's rate (bench_receive.py shows every receiver
-gets them all).
+fed by the same bare publisher at 30 fps. Over one window, each thread's CPU a frame, user and
+kernel, from /proc/PID/task (the main thread, Python's others by `threading` name where the
+process says, Fast DDS' together); over the next, `perf record` (on-CPU samples, user space)
+says which code the user time went to: copies (libc's memmove, memset), the allocator, the
+Python interpreter (the executor's and the node's Python), rclpy and rcl, the message type's
+generated code (rosidl), Fast DDS. perf is not a dependency of the project (Debian:
+linux-perf); without it only the threads are shown. The kernel's time is mostly page faults
+(bench_receive.py counts them). Frames are counted at the publisher's rate (bench_receive.py
+shows every receiver gets them all).
 """
 
 import argparse
@@ -44,19 +44,17 @@ from bench_receive import parse_sizes, receiver_command, RECEIVERS
 import ros_harness
 
 FPS = 30.0
-# Leaf frames of a thread that waits (py-spy's native stacks see waiting threads too).
-IDLE = ('rcl_wait', 'pthread_cond_wait', 'pthread_cond_timedwait', 'pthread_cond_clockwait',
-        'epoll_wait', 'sem_wait', 'sem_timedwait', 'select', 'poll', 'os_read', 'nanosleep',
-        'lock_PyThread_acquire_lock', 'take_gil')
-# What a sample's stack is doing, the first that matches (outermost to innermost frames).
-CATEGORIES = (
-    ('take: to Python (rosidl convert_to_py)', ('convert_to_py',)),
-    ('take: middleware (rcl_take, deserialise)', ('rcl_take',)),
-    ('callback (the node: stats, bridge, worker, step)', (
-        'usbcam_subscriber.py', 'vision_step.py', 'transport.py', 'cv_bridge.py',
-        'latest_frame.py', 'bare_image_subscriber.py', 'circle.py', 'display.py')),
-    ('receive thread loop (wait set)', ('receive_thread.py',)),
-    ('executor (wait set, tasks, handlers)', ('executors.py', 'task.py')),
+# Where user-space samples are, by the library (and, in libc, the function) they fall in.
+CODE = (
+    ('copies (memmove, memcpy, memset)', lambda dso, sym: 'libc' in dso and (
+        'memmove' in sym or 'memcpy' in sym or 'memset' in sym)),
+    ('allocator, locks (the rest of libc)', lambda dso, sym: 'libc' in dso),
+    ('Python interpreter (executor, callbacks)', lambda dso, sym: 'python' in dso),
+    ('rclpy, rcl, rmw', lambda dso, sym: any(
+        name in dso for name in ('rclpy', 'librcl', 'librmw', 'librcutils', 'librcpputils'))),
+    ('message code (rosidl)', lambda dso, sym: 'rosidl' in dso),
+    ('Fast DDS', lambda dso, sym: 'fastrtps' in dso or 'fastcdr' in dso or 'fastdds' in dso),
+    ('numpy, OpenCV', lambda dso, sym: 'numpy' in dso or 'multiarray' in dso or 'cv2' in dso),
 )
 
 
@@ -75,24 +73,37 @@ def thread_ticks(pid):
     return out
 
 
-def python_threads(py_spy, pid):
-    """Return {tid: thread name} of the Python threads, from py-spy dump."""
-    done = subprocess.run([py_spy, 'dump', '--pid', str(pid)], capture_output=True, text=True,
-                          timeout=60)
-    return {int(tid): name for tid, name in re.findall(
-        r'^Thread (?:0x)?(\d+) \([^)]*\): "([^"]*)"', done.stdout, re.M)}
-
-
-def classify(stack):
-    """Return a sample's category, or None when its thread waits."""
-    frames = stack.split(';')
-    leaf = ';'.join(frames[-3:])
-    if any(name in leaf for name in IDLE):
+def code_shares(pid, seconds):
+    """Return {what: share of user-space samples} from perf over seconds, or None."""
+    perf = shutil.which('perf')
+    if perf is None:
         return None
-    for category, marks in CATEGORIES:
-        if any(mark in frame for frame in frames for mark in marks):
-            return category
-    return 'other'
+    with tempfile.TemporaryDirectory() as folder:
+        data = os.path.join(folder, 'perf.data')
+        subprocess.run([perf, 'record', '-e', 'cpu-clock', '-F', '999', '-o', data, '-p',
+                        str(pid), '--', 'sleep', str(seconds)], capture_output=True,
+                       timeout=seconds + 60)
+        report = subprocess.run([perf, 'report', '-i', data, '--no-children', '--sort',
+                                 'dso,sym', '--stdio', '-g', 'none'], capture_output=True,
+                                text=True, timeout=120).stdout
+    shares = collections.Counter()
+    for line in report.splitlines():
+        found = re.match(r'\s*([\d.]+)%\s+(\S+)\s+\[(.)\]\s+(.*)', line)
+        if not found or found.group(3) == 'k':
+            continue
+        share, dso, symbol = float(found.group(1)), found.group(2), found.group(4)
+        what = next((name for name, test in CODE if test(dso, symbol)), 'other')
+        shares[what] += share
+    total = sum(shares.values())
+    return {what: share / total for what, share in shares.items()} if total else None
+
+
+def thread_group(pid, tid, comm):
+    if tid == pid:
+        return 'main thread (the executor)'
+    if comm.startswith('dds.'):
+        return "Fast DDS' threads"
+    return "the others (receive, worker; Fast DDS' on 2.6, whose threads have no names)"
 
 
 def main(argv=None):
@@ -100,11 +111,7 @@ def main(argv=None):
     parser.add_argument('receiver', choices=RECEIVERS)
     parser.add_argument('--size', type=parse_sizes, default=parse_sizes('640x480'))
     parser.add_argument('--seconds', type=float, default=20.0)
-    parser.add_argument('--py-spy', default=shutil.which('py-spy'),
-                        help='py-spy executable (pip install py-spy)')
     args = parser.parse_args(argv)
-    if not args.py_spy:
-        parser.error('py-spy not found: pip install py-spy, or give --py-spy PATH')
     size = args.size[0]
     env = local_node_env()
     env['PYTHONPATH'] = str(BENCH) + os.pathsep + env.get('PYTHONPATH', '')
@@ -116,66 +123,45 @@ def main(argv=None):
         str(size[1]), repr(FPS), 'reliable', '--py-vision-profile'], env, workdir)
     receiver = start_helper('receiver', receiver_command(args.receiver, size, sys.executable),
                             env, workdir)
-    samples = os.path.join(workdir, 'samples.txt')
-    keep = os.environ.get('PROFILE_SAMPLES')  # where to leave the raw samples, if anywhere
     try:
         if args.receiver == 'bare':
             receiver.wait_for_output(FIRST_FRAME_MARK, 60)
         else:
             receiver.wait_for_output(r'received|frames in|running step|drawing on', 60)
         time.sleep(5.0)
-        names = python_threads(args.py_spy, receiver.pid)
-        # The threads' CPU first, then the samples: py-spy's own work is not counted.
+        # The threads' CPU first, then perf's samples: perf's own work is not counted.
         before = thread_ticks(receiver.pid)
         time.sleep(args.seconds)
         after = thread_ticks(receiver.pid)
-        subprocess.run([args.py_spy, 'record', '--native', '--idle', '--rate', '1000',
-                        '--duration', str(int(args.seconds)), '--format', 'raw', '--output',
-                        samples, '--pid', str(receiver.pid)], capture_output=True,
-                       timeout=args.seconds + 60)
-        seconds = args.seconds
+        shares = code_shares(receiver.pid, args.seconds)
     finally:
         receiver.end(timeout=15.0)
         publisher.end(timeout=15.0)
         domain.release()
-    frames = FPS * seconds
+        shutil.rmtree(workdir, ignore_errors=True)
+    frames = FPS * args.seconds
     groups = collections.defaultdict(lambda: [0, 0])
     for tid, (comm, user, system) in after.items():
-        if tid not in before:
-            continue
-        if tid == receiver.pid:
-            group = 'main thread (executor)'
-        elif tid in names:
-            group = 'Python thread %r' % names[tid]
-        else:
-            group = 'other threads (Fast DDS)'
-        groups[group][0] += user - before[tid][1]
-        groups[group][1] += system - before[tid][2]
-    print('%s, %dx%d at %g fps, %g s' % (args.receiver, size[0], size[1], FPS, seconds))
+        if tid in before:
+            group = groups[thread_group(receiver.pid, tid, comm)]
+            group[0] += user - before[tid][1]
+            group[1] += system - before[tid][2]
+    print('%s, %dx%d at %g fps, %g s' % (args.receiver, size[0], size[1], FPS, args.seconds))
     print('\n| thread | user ms a frame | kernel ms a frame |\n|---|---:|---:|')
-    total = [0, 0]
-    for group, (user, system) in sorted(groups.items()):
-        total[0] += user
-        total[1] += system
+    user = system = 0
+    for name, (group_user, group_system) in sorted(groups.items()):
+        user += group_user
+        system += group_system
         print('| %s | %.3f | %.3f |' % (
-            group, 1e3 * user / CLK_TCK / frames, 1e3 * system / CLK_TCK / frames))
-    print('| all | %.3f | %.3f |' % (
-        1e3 * total[0] / CLK_TCK / frames, 1e3 * total[1] / CLK_TCK / frames))
-    counts = collections.Counter()
-    with open(samples) as stream:
-        for line in stream:
-            stack, _, count = line.rstrip('\n').rpartition(' ')
-            category = classify(stack)
-            if category is not None and count.isdigit():
-                counts[category] += int(count)
-    busy = sum(counts.values())
-    print('\nPython threads, samples while not waiting (%d):\n' % busy)
-    print('| what | share |\n|---|---:|')
-    for category, count in counts.most_common():
-        print('| %s | %.0f%% |' % (category, 100.0 * count / max(1, busy)))
-    if keep:
-        shutil.copy(samples, keep)
-    shutil.rmtree(workdir, ignore_errors=True)
+            name, 1e3 * group_user / CLK_TCK / frames, 1e3 * group_system / CLK_TCK / frames))
+    user_ms = 1e3 * user / CLK_TCK / frames
+    print('| all | %.3f | %.3f |' % (user_ms, 1e3 * system / CLK_TCK / frames))
+    if shares is None:
+        print('\n(no perf here: apt-get install linux-perf for the user time by code)')
+        return 0
+    print('\n| user time by code | share | ms a frame |\n|---|---:|---:|')
+    for name, share in sorted(shares.items(), key=lambda item: -item[1]):
+        print('| %s | %.0f%% | %.3f |' % (name, 100.0 * share, share * user_ms))
     return 0
 
 
