@@ -33,12 +33,11 @@ from hand_poses import FOLDED, place, pose, THUMB_ACROSS, thumb_up
 import numpy as np
 from photos import hand_photo, photo
 from py_vision.models.hands import Hand
-from py_vision.params import Spec
+from py_vision.params import ConfigError, Spec
 from py_vision.steps import loader
 from py_vision.steps.api import StepContext
 from py_vision.steps.circle import Circle
 from py_vision.steps.faces import Faces
-from py_vision.params import ConfigError
 from py_vision.steps.hand_signs import DRIVE_SCORE_FLOOR, HandSigns, motion, twist_of
 from py_vision.vision_step import StepPublishers, VisionStep
 import pytest
@@ -286,7 +285,7 @@ def test_hand_signs_caps_the_speeds_for_the_base():
 def test_hand_signs_with_an_enable_topic_moves_only_while_it_says_true():
     test = SignsUnderTest(hold_frames=1, enable_topic='/hand_signs/enable',
                           enable_timeout=0.5)
-    assert "moving only while /hand_signs/enable says true (within 0.5 s)" in test.note
+    assert 'moving only while /hand_signs/enable says true (within 0.5 s)' in test.note
     enable = test.node.subscriptions['/hand_signs/enable']
     sent = len(test.twists.sent)
     test.step.tracker.hands = [THUMB_UP]
