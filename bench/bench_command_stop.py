@@ -260,12 +260,14 @@ def main():
             print('camera stops, %s ...' % label, flush=True)
             stops = summary(camera_stops(env, options.work_ms, options.rounds))
             stops['beyond_timeout_p50_ms'] = round(stops['p50_ms'] - COMMAND_TIMEOUT * 1e3, 1)
-            cases.append(dict(stops, what='last frame to zero', loaded=loaded))
+            cases.append(dict(stops, what='last frame to zero', loaded=loaded,
+                              load_average=round(os.getloadavg()[0], 1)))
             print('  %s' % cases[-1], flush=True)
             print('SIGINT, %s ...' % label, flush=True)
             cases.append(dict(summary(sigint_stops(env, options.sigint_work_ms,
                                                    options.sigint_rounds)),
-                              what='SIGINT to zero', loaded=loaded))
+                              what='SIGINT to zero', loaded=loaded,
+                              load_average=round(os.getloadavg()[0], 1)))
             print('  %s' % cases[-1], flush=True)
         finally:
             if load is not None:
@@ -275,12 +277,12 @@ def main():
     print('\nvision_step hand_signs, command_timeout %g s, on %s (rclpy from %s), %d CPUs' % (
         COMMAND_TIMEOUT, 'Python ' + sys.version.split()[0],
         rclpy.__file__.split('/lib/python')[0], os.cpu_count()))
-    print('\n| what | machine | rounds | p50 | p99 | max |')
-    print('|---|---|---:|---:|---:|---:|')
+    print('\n| what | machine | load average | rounds | p50 | p99 | max |')
+    print('|---|---|---:|---:|---:|---:|---:|')
     for case in cases:
-        print('| %s | %s | %d | %.1f ms | %.1f ms | %.1f ms |' % (
+        print('| %s | %s | %.1f | %d | %.1f ms | %.1f ms | %.1f ms |' % (
             case['what'], 'loaded (%d busy)' % options.load if case['loaded'] else 'as it is',
-            case['n'], case['p50_ms'], case['p99_ms'], case['max_ms']))
+            case['load_average'], case['n'], case['p50_ms'], case['p99_ms'], case['max_ms']))
     save_results('command_stop', {
         'command_timeout_s': COMMAND_TIMEOUT, 'fps': FPS, 'work_ms': options.work_ms,
         'sigint_work_ms': options.sigint_work_ms, 'load_processes': options.load,
