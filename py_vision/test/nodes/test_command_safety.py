@@ -192,7 +192,10 @@ def test_the_camera_stopping_while_the_robot_moves_stops_it_within_command_timeo
     # monotonic clock, so it stops the robot all the same.
     reliable = Timed(peer, Twist, CMD_VEL, RELIABLE)
     best_effort = Timed(peer, Twist, CMD_VEL, BEST_EFFORT)
-    node = start(launch, scripted_env, command_timeout=1.0, use_sim_time=use_sim_time)
+    # max_frame_age long: on a loaded machine a frame kept waiting would stop the robot as
+    # stale, before the watchdog, whose deadline is measured here.
+    node = start(launch, scripted_env, command_timeout=1.0, max_frame_age=60.0,
+                 use_sim_time=use_sim_time)
     camera = Camera(peer)
     camera.send_until(lambda: any(moving(m) for m in reliable.messages()), THUMB_UP,
                       what='a moving command')
