@@ -19,7 +19,8 @@ Measure how soon hand_signs stops the robot: after the camera's last frame, and 
 
 The node is vision_step running hand_signs with its tracker replaced by one that sees a
 thumbs-up in every frame the bench marks so (the real step, gate and publishers; the models are
-loaded but not run), and `--work-ms` of busy work a frame in their place. The bench publishes
+loaded but not run), and `--work-ms` of work a frame in their place (`--work opencv`: outside
+Python's GIL, as a model's invoke; `python`: a Python loop holding it). The bench publishes
 the frames (640x480 bgr8, 30 fps) and subscribes to the commands, in this process.
 
 - camera stop: frames until a moving command arrives, then none; the time from the last frame
@@ -55,23 +56,34 @@ STEP = 'bench_signs:BenchSigns'
 BUSY = 'import os\nos.nice(0)\nwhile True:\n    pass\n'
 
 # The step double: hand_signs with a tracker that sees a thumbs-up where the frame's first
-# pixel's blue is 1, after `work_ms` of busy work (the models' place).
-STEP_MODULE = '''
+# pixel's blue is 1, after `work_ms` of work in the models' place: OpenCV filtering, which like
+# a model's invoke runs outside Python's GIL (BENCH_WORK=python: a busy Python loop instead,
+# which holds it, the worst case for the node's other threads).
+STEP_MODULE = """
 import os
 import time
 
+import cv2
+import numpy as np
 from hand_poses import thumb_up
 from py_vision.models.hands import Hand
 from py_vision.steps.hand_signs import HandSigns
 
 WORK_S = float(os.environ.get('BENCH_WORK_MS', '0')) / 1e3
+IN_PYTHON = os.environ.get('BENCH_WORK') == 'python'
+
+
+def work(seconds):
+    end = time.perf_counter() + seconds
+    pixels = np.zeros((240, 320, 3), np.uint8)
+    while time.perf_counter() < end:
+        if not IN_PYTHON:
+            cv2.blur(pixels, (15, 15), dst=pixels)
 
 
 class Thumbs:
     def find(self, image):
-        end = time.perf_counter() + WORK_S
-        while time.perf_counter() < end:
-            pass
+        work(WORK_S)
         return [Hand(thumb_up(), 'right', 0.9)] if image[0, 0, 0] == 1 else []
 
 
@@ -80,7 +92,7 @@ class BenchSigns(HandSigns):
         note = super().start(context)
         self.tracker = Thumbs()
         return note
-'''
+"""
 
 
 class Bench:
@@ -144,8 +156,11 @@ class Bench:
 
 
 def start_node(env, work_ms):
+    # command_timeout longer than a frame's work (the SIGINT cases' frames take longer than
+    # COMMAND_TIMEOUT: the watchdog would stop the robot between every two of them).
+    timeout = max(COMMAND_TIMEOUT, 3 * work_ms / 1e3)
     node = ros_harness.NodeProcess('vision_step', ros_harness.ros_args({
-        'step': STEP, 'command_timeout': COMMAND_TIMEOUT, 'max_frame_age': 2.0}),
+        'step': STEP, 'command_timeout': timeout, 'max_frame_age': timeout}),
         dict(env, BENCH_WORK_MS=str(work_ms)))
     node.wait_for_output('running step %s' % STEP, timeout=120.0)
     return node
@@ -245,9 +260,12 @@ def main():
                         help="busy work a frame in the models' place (camera stops)")
     parser.add_argument('--sigint-work-ms', type=float, default=500.0,
                         help='busy work a frame in the SIGINT cases (a frame under way)')
+    parser.add_argument('--work', choices=('opencv', 'python'), default='opencv',
+                        help="the work in the models' place: OpenCV (outside the GIL, as a "
+                             "model's invoke) or a Python loop (holding it)")
     options = parser.parse_args()
 
-    env = local_node_env()
+    env = dict(local_node_env(), BENCH_WORK=options.work)
     workdir = Path(tempfile.mkdtemp(prefix='bench_command_stop_'))
     (workdir / 'bench_signs.py').write_text(STEP_MODULE)
     env['PYTHONPATH'] = os.pathsep.join(p for p in (str(workdir), str(TESTS),
@@ -274,9 +292,10 @@ def main():
                 load.close()
 
     import rclpy
-    print('\nvision_step hand_signs, command_timeout %g s, on %s (rclpy from %s), %d CPUs' % (
-        COMMAND_TIMEOUT, 'Python ' + sys.version.split()[0],
-        rclpy.__file__.split('/lib/python')[0], os.cpu_count()))
+    print('\nvision_step hand_signs, command_timeout %g s, work %s (%g ms a frame, %g ms in '
+          'the SIGINT cases), on Python %s (rclpy from %s), %d CPUs' % (
+              COMMAND_TIMEOUT, options.work, options.work_ms, options.sigint_work_ms,
+              sys.version.split()[0], rclpy.__file__.split('/lib/python')[0], os.cpu_count()))
     print('\n| what | machine | load average | rounds | p50 | p99 | max |')
     print('|---|---|---:|---:|---:|---:|---:|')
     for case in cases:
@@ -285,6 +304,7 @@ def main():
             case['load_average'], case['n'], case['p50_ms'], case['p99_ms'], case['max_ms']))
     save_results('command_stop', {
         'command_timeout_s': COMMAND_TIMEOUT, 'fps': FPS, 'work_ms': options.work_ms,
+        'work': options.work,
         'sigint_work_ms': options.sigint_work_ms, 'load_processes': options.load,
         'cpus': os.cpu_count(), 'cases': cases})
 
