@@ -224,7 +224,7 @@ class CommandGate:
             return why
 
     def frame_failed(self) -> bool:
-        """Send one zero: the step failed on a frame (unless one went out already); say if."""
+        """Send a stop: the step failed on a frame (unless one went out already); say if."""
         with self._changed:
             self._forget()
             return self._zero_once(FAILED, self.clock())

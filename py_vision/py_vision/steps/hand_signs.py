@@ -246,7 +246,7 @@ class HandSigns(Step):
         return image
 
     def frame_failed(self, header: Any, error: Exception) -> None:
-        """Stop the robot: the step failed on a frame (one zero command)."""
+        """Stop the robot: the step failed on a frame (one stop)."""
         if self.gate is not None:
             self.gate.frame_failed()
 
