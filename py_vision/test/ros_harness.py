@@ -285,9 +285,9 @@ def _signal_resetter():
         _signal_resetter.cache = env if usable else None
     if _signal_resetter.cache is None:
         raise RuntimeError(
-            'the tests run with %s ignored (as a script\'s `&` or nohup starts them), and this '
-            "machine's env cannot give the processes they start the signals' default action: "
-            "that needs GNU coreutils' env 8.31 or later (--default-signal)" % ', '.join(
+            'the tests run with %s ignored (a script started them with `&`, or nohup did), '
+            "and this machine's env cannot reset it for the processes they start: that needs "
+            "GNU coreutils' env 8.31 or later (--default-signal)" % ', '.join(
                 signal.Signals(sig).name for sig in _ignored_stop_signals()))
     return _signal_resetter.cache
 
