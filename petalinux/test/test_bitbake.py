@@ -17,22 +17,24 @@ bitbake, the tool PetaLinux 2023.2 runs, on the recipes enable_ros.py places in 
 
 ../shared/yocto/yocto-langdale.tar.zst holds bitbake 2.2 and the layers PetaLinux 2023.2 builds
 from: openembedded-core and meta-openembedded at langdale, Xilinx's meta-ros at rel-v2023.2
-(PY_VISION_YOCTO names another copy). It is unpacked once into .venv/yocto/ (again when the
-tarball changes). A board's project skeleton (fixtures/zub1cg) is copied to
-.venv/yocto/project/, enable_ros.py is run on it, and a build folder's bblayers.conf lists those
-layers and the project's meta-user layer, as PetaLinux's does, but without PetaLinux's
+(PY_VISION_YOCTO names another copy). It is unpacked once into ~/.cache/py_vision/yocto/
+(PY_VISION_YOCTO_CACHE names another place; again when the tarball changes). There, in a folder
+of this checkout's own, a board's project skeleton (fixtures/zub1cg) is copied afresh and
+enable_ros.py run on it, and a build folder's bblayers.conf lists those layers and the
+project's meta-user layer, as PetaLinux's does, but without PetaLinux's
 BB_DANGLINGAPPENDS_WARNONLY: here a bbappend without its recipe is an error. MACHINE is
 qemuarm64 (Xilinx's layers are not there; PetaLinux's zynqmp machines are aarch64 too) and
 DISTRO nodistro; as root, the sanity class, which refuses root, is left out. There is no
 toolchain: the tests run what needs none, parsing, `bitbake -e`, the fetch and the licence
 checks (`do_patch` of the runtime, which has no patch, is told not to build quilt).
 
-The first parse of the 3300 recipes takes 2 to 4 minutes on a 2-core machine; bitbake keeps
-its cache in the build folder, and later runs parse only what changed (some 10 s a command).
-Every bitbake command runs under one lock (.venv/yocto/lock), so test workers, and two runs,
-take turns. Without the tarball, zstd, the host tools bitbake requires (scripts/test.sh
-installs chrpath, diffstat, gawk and cpio) or the en_US.UTF-8 locale these tests are skipped
-with the reason, and fail in CI. The fetch needs files.pythonhosted.org.
+The first parse of the 3300 recipes takes about 3 minutes on a 2-core machine alone (10 at
+load 10); bitbake keeps its cache in the build folder, which stays where it is, so later runs
+parse only the files enable_ros.py placed anew (10 to 50 s a command). Every bitbake command
+holds the build folder's lock, so test workers, and two runs, take turns. Without the tarball,
+zstd, the host tools bitbake requires (scripts/test.sh installs chrpath, diffstat, gawk and
+cpio) or the en_US.UTF-8 locale these tests are skipped with the reason, and fail in CI. The
+fetch needs files.pythonhosted.org.
 """
 
 import contextlib
