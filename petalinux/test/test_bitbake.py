@@ -55,8 +55,8 @@ TOOL = REPO / 'petalinux' / 'enable_ros.py'
 LAYER_SOURCE = REPO / 'petalinux' / 'meta-user'
 BOARD = 'zub1cg'
 # The unpacked layers, shared; the build folders, one set per checkout (another checkout has
-# other recipes). Not in .venv: bitbake starts its server as "bitbake-server", whose Python
-# cannot tell its own path and then takes a virtualenv above its folder for its own.
+# other recipes). Not in .venv: tried there, bitbake's server (started as "bitbake-server", so
+# its Python does not know its own path) loaded .venv's packages and died in their start-up.
 CACHE = Path(os.environ.get('PY_VISION_YOCTO_CACHE') or Path(
     os.environ.get('XDG_CACHE_HOME') or Path.home() / '.cache') / 'py_vision' / 'yocto')
 CHECKOUT = CACHE / ('checkout-' + hashlib.sha1(str(REPO).encode()).hexdigest()[:12])
