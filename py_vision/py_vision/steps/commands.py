@@ -23,7 +23,7 @@ the step fail. The gate stands between the step and its command publisher:
   the sign) has been seen on `hold_frames` processed frames in a row, spanning at least
   `hold_time` seconds of their arrivals; until then, and whenever the reason changes, a zero
   command goes out instead: a robot moving on one reason always gets a zero before it moves on
-  another, even with hold_frames 1. A zero goes out at once.
+  another, even with hold_frames 1, and before any reversal. A zero goes out at once.
 - **Limits.** A moving command is capped to the base's speeds (`Limits`) and ramped up by at
   most the acceleration limit times the time since the last command went out; slowing down and
   stopping are never ramped.
@@ -38,7 +38,12 @@ the step fail. The gate stands between the step and its command publisher:
   the step stops (`stop()`), the gate sends a zero of its own, then nothing until fresh frames
   give commands again: a twist_mux or a joystick can take over meanwhile. After it, a moving
   command needs a sign held anew. The deadlines are kept by `watch()`, the gate's own thread
-  (`Watchdog`), on the monotonic clock: no executor, no ROS time, no other callback delays it.
+  (`Watchdog`), on the monotonic clock: no executor, no ROS time, no other callback delays it;
+  a frame that finds a deadline passed (the thread late) stops the robot first too.
+- **A command rate.** With `command_rate`, the last frame's command goes out again that many
+  times a second until the next frame's (or the watchdog's stop): a base whose own timeout is
+  shorter than the time between two processed frames keeps its command, for no longer than
+  command_timeout.
 - **Every stop reaches every reader.** Each stop (the gate's own zero, or a frame's zero after a
   moving command) goes out `stop_repeats` times, `stop_repeat_period` apart, then nothing: a
   best-effort reader that loses one copy gets the next. A moving command cancels the copies
@@ -60,7 +65,7 @@ import time
 from typing import Callable, Hashable, NamedTuple, Optional
 
 __all__ = ['CommandGate', 'DISABLED', 'FAILED', 'FRAME', 'GateSettings', 'HELD_BACK', 'Limits',
-           'REPEAT', 'STALE', 'STOP', 'STOPPED', 'TIMEOUT', 'Velocity', 'Watchdog']
+           'REPEAT', 'RESENT', 'STALE', 'STOP', 'STOPPED', 'TIMEOUT', 'Velocity', 'Watchdog']
 
 # Why a command went out (what `send` is told, and what `frame()` returns).
 FRAME = 'frame'          # the frame's own command (moving: held long enough; or a zero)
@@ -71,9 +76,12 @@ FAILED = 'failed'        # the gate's zero: the step failed on a frame
 DISABLED = 'disabled'    # the gate's zero: the enable input said false or lapsed
 STOPPED = 'stopped'      # the gate's zero: the step is stopping; nothing is sent after it
 REPEAT = 'repeat'        # another copy of the last stop's zero
+RESENT = 'resent'        # the last frame's command again (command_rate), until the next
 NOTHING = None           # nothing sent
 # Times are sums of float seconds: a sign held hold_time to the microsecond has held it.
 _CLOCK_SLACK_S = 1e-6
+# How soon the watchdog tries again after a send raised.
+WATCH_RETRY_S = 0.1
 
 
 class Velocity(NamedTuple):
@@ -125,6 +133,7 @@ class GateSettings:
     max_frame_age: float = 0.5        # seconds since a frame arrived: too old to steer
     stop_repeats: int = 3             # copies of each stop's zero
     stop_repeat_period: float = 0.05  # seconds between them
+    command_rate: float = 0.0         # the last frame's command again, this often (0: never)
     enable_timeout: Optional[float] = None  # the enable input's lifetime; None: no input
     limits: Limits = field(default_factory=Limits)
 
@@ -138,10 +147,10 @@ class CommandGate:
     """
     Between a robot-driving step and its publisher: hold, limits, stale frames, enable, stops.
 
-    send(command, why) publishes one Velocity; `why` is FRAME, HELD_BACK, STALE, TIMEOUT,
-    FAILED, DISABLED, STOPPED or REPEAT. When it returns False the command counts as not sent,
-    so that the gate's last zero still goes out at stop(). `clock` is monotonic seconds and
-    `sleep` waits (time.monotonic and time.sleep; a FakeClock in tests).
+    send(command, why) publishes one Velocity; `why` is FRAME, HELD_BACK, STALE, RESENT,
+    TIMEOUT, FAILED, DISABLED, STOPPED or REPEAT. When it returns False the command counts as
+    not sent, so that the gate's last zero still goes out at stop(). `clock` is monotonic
+    seconds and `sleep` waits (time.monotonic and time.sleep; a FakeClock in tests).
     """
 
     def __init__(self, send: Send, settings: GateSettings = GateSettings(),
@@ -158,7 +167,10 @@ class CommandGate:
         self._armed = False      # a command from a frame went out since the gate's last zero
         self._last = STOP        # the last command sent
         self._last_sent_at: Optional[float] = None
+        self._last_frame_at: Optional[float] = None  # when the last frame was decided on
         self._last_command_at = 0.0              # the last frame's command
+        self._wanted = STOP                      # what it asked for, before the ramp
+        self._resend_at = 0.0                    # when it goes out again (command_rate)
         self._copies_left = 0                    # copies of the last stop still to send
         self._next_copy_at = 0.0
         self._enabled_at: Optional[float] = None  # the last enable(True)
@@ -191,9 +203,12 @@ class CommandGate:
             if self._closed:
                 return NOTHING
             now = self.clock()
+            # What the watchdog should have done by now, done first (its thread may be late).
+            self._expire(now)
             settings = self.settings
             if not self._enable_holds(now):
                 return DISABLED
+            previous_frame_at, self._last_frame_at = self._last_frame_at, now
             if age is not None and age > settings.max_frame_age:
                 # The world has moved on since this frame: stop, once, and hold again after.
                 self._forget()
@@ -210,16 +225,22 @@ class CommandGate:
                 settings.hold_time <= 0.0
                 or arrived - self._held_since >= settings.hold_time - _CLOCK_SLACK_S)
             moving = self._last != STOP
-            # Not held long enough, or a new reason while the robot moves on another: stop.
-            if command != STOP and (not held or (self._held == 1 and moving)):
+            reverses = any(new * old < 0.0 for new, old in zip(command, self._last))
+            # Not held long enough, a new reason while the robot moves on another, or a
+            # reversal: stop first.
+            if command != STOP and (not held or (self._held == 1 and moving) or reverses):
                 command, why = STOP, HELD_BACK
+            wanted = command
             if command != STOP:
-                dt = settings.command_timeout if self._last_sent_at is None else min(
-                    now - self._last_sent_at, settings.command_timeout)
+                # The ramp's step: the time since the last command, or since the last frame
+                # after a quiet spell (a robot standing still starts from one frame's step).
+                dt = min([settings.command_timeout] + [now - at for at in (
+                    self._last_sent_at, previous_frame_at) if at is not None])
                 command = settings.limits.apply(self._last, command, dt)
             if self._send(command, why) is not False:
                 self._armed = True
                 self._last_command_at = now
+                self._wanted = wanted
                 self._sent(command, now, stopping=moving and command == STOP)
             return why
 
@@ -235,13 +256,14 @@ class CommandGate:
             if self._closed or self.settings.enable_timeout is None:
                 return
             now = self.clock()
+            self._enable_holds(now)   # a lapse nobody has seen yet is a stop, first
             self._enabled_at = now if enabled else None
             self._enable_holds(now)
             self._changed.notify()
 
     def check(self) -> Optional[float]:
         """
-        Send what is due (a timeout's zero, an enable's lapse, a stop's copy).
+        Send what is due (a timeout's or an enable's stop, a stop's copy, a command again).
 
         Return the seconds until something may next be due, or None when nothing can be before
         the gate changes (the watchdog waits that long).
@@ -249,11 +271,22 @@ class CommandGate:
         with self._changed:
             return self._check(self.clock())
 
-    def watch(self) -> None:
-        """Keep the gate's deadlines until stop() (the watchdog thread's body)."""
+    def watch(self, on_error: Optional[Callable[[Exception], None]] = None) -> None:
+        """
+        Keep the gate's deadlines until stop() (the watchdog thread's body).
+
+        A send that raises (the node's middleware gone under it) is given to on_error, and
+        tried again WATCH_RETRY_S later: the watchdog never ends before the gate is stopped.
+        """
         with self._changed:
             while not self._closed:
-                self._changed.wait(self._check(self.clock()))
+                try:
+                    delay = self._check(self.clock())
+                except Exception as error:  # noqa: B902 - whatever send raised
+                    if on_error is not None:
+                        on_error(error)
+                    delay = WATCH_RETRY_S
+                self._changed.wait(delay)
 
     def stop(self) -> bool:
         """
@@ -273,40 +306,60 @@ class CommandGate:
                 self._armed, sent = False, True
                 copies = self.settings.stop_repeats - 1
             self._copies_left = 0
-            for _ in range(copies):
-                self.sleep(self.settings.stop_repeat_period)
-                self._send(STOP, REPEAT)
-            return sent
+            period = self.settings.stop_repeat_period
+        # Closed: nothing else sends any more, so the copies keep their place without the lock.
+        for _ in range(copies):
+            self.sleep(period)
+            self._send(STOP, REPEAT)
+        return sent
+
+    def _expire(self, now: float) -> None:
+        """Stop the robot when the enable input lapsed or no frame gave a command in time."""
+        if self.settings.enable_timeout is not None:
+            self._enable_holds(now)
+        if self._armed and now >= self._last_command_at + self.settings.command_timeout:
+            self._forget()
+            self._zero_once(TIMEOUT, now)
 
     def _check(self, now: float) -> Optional[float]:
         if self._closed:
             return None
         settings = self.settings
+        self._expire(now)
         waits = []
+        if settings.enable_timeout is not None and self._enabled:
+            waits.append(self._enabled_at + settings.enable_timeout - now)
+        if self._armed:
+            waits.append(self._last_command_at + settings.command_timeout - now)
         if self._copies_left and now >= self._next_copy_at:
             if self._send(STOP, REPEAT) is not False:
                 self._last, self._last_sent_at = STOP, now
             self._copies_left -= 1
             self._next_copy_at = now + settings.stop_repeat_period
-        if self._armed:
-            left = self._last_command_at + settings.command_timeout - now
-            if left <= 0:
-                self._forget()
-                self._zero_once(TIMEOUT, now)
-            else:
-                waits.append(left)
-        if settings.enable_timeout is not None and self._enable_holds(now):
-            waits.append(self._enabled_at + settings.enable_timeout - now)
         if self._copies_left:
             waits.append(self._next_copy_at - now)
+        elif self._armed and settings.command_rate > 0.0:
+            if now >= self._resend_at:
+                self._resend(now)
+            waits.append(self._resend_at - now)
         return max(0.0, min(waits)) if waits else None
+
+    def _resend(self, now: float) -> None:
+        """Send the last frame's command again (ramped on), command_rate times a second."""
+        command = self._wanted
+        if command != STOP:
+            dt = min(now - self._last_sent_at, self.settings.command_timeout)
+            command = self.settings.limits.apply(self._last, command, dt)
+        self._resend_at = now + 1.0 / self.settings.command_rate
+        if self._send(command, RESENT) is not False:
+            self._last, self._last_sent_at = command, now
 
     def _enable_holds(self, now: float) -> bool:
         """Return whether frames may drive; stop once when the enable input went off or lapsed."""
         timeout = self.settings.enable_timeout
         if timeout is None:
             return True
-        enabled = self._enabled_at is not None and now - self._enabled_at < timeout
+        enabled = self._enabled_at is not None and now < self._enabled_at + timeout
         if self._enabled and not enabled:
             self._forget()   # moving again needs a sign held anew
             self._zero_once(DISABLED, now)
@@ -334,6 +387,8 @@ class CommandGate:
     def _sent(self, command: Velocity, now: float, stopping: bool) -> None:
         """Record a command sent; a stop schedules its copies, a moving command cancels them."""
         self._last, self._last_sent_at = command, now
+        if self.settings.command_rate > 0.0:
+            self._resend_at = now + 1.0 / self.settings.command_rate
         if stopping:
             self._copies_left = self.settings.stop_repeats - 1
             self._next_copy_at = now + self.settings.stop_repeat_period
@@ -345,8 +400,10 @@ class CommandGate:
 class Watchdog:
     """The gate's own thread: keeps its deadlines (gate.watch()) until the gate is stopped."""
 
-    def __init__(self, gate: CommandGate, name: str = 'command_watchdog'):
-        self._thread = threading.Thread(target=gate.watch, name=name, daemon=True)
+    def __init__(self, gate: CommandGate, on_error: Optional[Callable[[Exception], None]] = None,
+                 name: str = 'command_watchdog'):
+        self._thread = threading.Thread(target=gate.watch, args=(on_error,), name=name,
+                                        daemon=True)
         self._thread.start()
 
     def join(self, timeout: float = 1.0) -> bool:

@@ -29,6 +29,7 @@ quiet) when no frame was processed for `command_timeout` seconds (the gate's own
 thread), when the step fails on a frame, when the enable lapses and when the node stops.
 """
 
+import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 import cv2
@@ -123,6 +124,7 @@ def gate_settings(settings: Dict[str, Any]) -> GateSettings:
         hold_frames=settings['hold_frames'], hold_time=settings['hold_time'],
         command_timeout=settings['command_timeout'], max_frame_age=settings['max_frame_age'],
         stop_repeats=settings['stop_repeats'], stop_repeat_period=settings['stop_repeat_period'],
+        command_rate=settings['command_rate'],
         enable_timeout=settings['enable_timeout'] if settings['enable_topic'] else None,
         limits=Limits(settings['max_linear_speed'], settings['max_angular_speed'],
                       settings['linear_accel'], settings['angular_accel']))
@@ -169,10 +171,13 @@ class HandSigns(Step):
              'command goes out', (0.05, 60.0)),
         Spec('max_frame_age', 0.5, 'seconds since a frame arrived on this host after which it '
              'stops the robot instead of steering it', (0.01, 60.0), live=True),
+        Spec('command_rate', 0.0, "times a second the last frame's command goes out again until "
+             'the next (0: once a processed frame): for a base whose own timeout is shorter '
+             'than the time between two processed frames', (0.0, 50.0)),
         Spec('stop_repeats', 3, 'copies of each stop command sent, for readers that may lose '
-             'one (best effort)', (1, 20)),
+             'one (best effort)', (1, 10)),
         Spec('stop_repeat_period', 0.05, 'seconds between the copies of a stop command',
-             (0.01, 1.0)),
+             (0.01, 0.1)),
         Spec('enable_topic', '', 'a std_msgs/Bool topic that must say true, more recently than '
              'enable_timeout, for the robot to move; empty: no enable input'),
         Spec('enable_timeout', 0.5, 'seconds a true on enable_topic lets the robot move',
@@ -188,6 +193,9 @@ class HandSigns(Step):
         self._frame_age: Callable[[], Optional[float]] = lambda: None
         self._now: Callable[[], Any] = lambda: None
         self._stops: Optional[ThrottledLog] = None  # the gate's own zeros, logged
+        # The gate's clock and sleep (monotonic; a test's fake clock, set before start()).
+        self.clock: Callable[[], float] = time.monotonic
+        self.sleep: Callable[[float], None] = time.sleep
 
     def start(self, context: StepContext) -> Optional[str]:
         """Load the two models; create the publishers, the enable input and the watchdog."""
@@ -205,14 +213,14 @@ class HandSigns(Step):
         self._frame_age = context.frame_age
         self._now = context.node.get_clock().now
         self._stops = ThrottledLog(context.logger, STOP_LOG_PERIOD_S) if context.logger else None
-        self.gate = CommandGate(self._send, gate_settings(self.settings))
+        self.gate = CommandGate(self._send, gate_settings(self.settings), self.clock, self.sleep)
         enable = ''
         if self.settings['enable_topic']:
             subscription = context.create_subscription(
                 Bool, self.settings['enable_topic'], self._enable, ENABLE_QOS)
             enable = '; moving only while %s says true (within %g s)' % (
                 subscription.topic_name, self.settings['enable_timeout'])
-        self.watchdog = Watchdog(self.gate)
+        self.watchdog = Watchdog(self.gate, self._watchdog_failed)
         return '%s; %s and %s; signs on %s, %s on %s%s' % (
             self.tracker.landmark_model.runtime, PALM_FILE, LANDMARK_FILE,
             self.signs.topic_name, 'TwistStamped' if stamped else 'Twist',
@@ -263,6 +271,11 @@ class HandSigns(Step):
 
     def _enable(self, msg: Bool) -> None:
         self.gate.enable(bool(msg.data))
+
+    def _watchdog_failed(self, error: Exception) -> None:
+        if self._stops is not None:
+            self._stops.error('watchdog', 'the command watchdog could not send: %s: %s; trying '
+                              'again' % (type(error).__name__, error))
 
     def _send(self, velocity: Velocity, why: str) -> Optional[bool]:
         """Publish one command (the gate's send, under its lock); False: it was dropped."""

@@ -26,8 +26,8 @@ import time
 
 from fake_clock import FakeClock
 from py_vision.steps.commands import CommandGate, DISABLED, FAILED, FRAME, GateSettings
-from py_vision.steps.commands import HELD_BACK, Limits, REPEAT, STALE, STOP, STOPPED, TIMEOUT
-from py_vision.steps.commands import Velocity, Watchdog
+from py_vision.steps.commands import HELD_BACK, Limits, REPEAT, RESENT, STALE, STOP, STOPPED
+from py_vision.steps.commands import TIMEOUT, Velocity, Watchdog
 import pytest
 
 ZERO = (0.0, 0.0)
@@ -147,11 +147,23 @@ def test_a_moving_command_ramps_up_at_the_acceleration_limit_and_stops_at_once()
     gate.frame('thumb_up', Velocity(0.2, 0.0))     # slower, at once (linear_speed lowered)
     gate.frame('no_hand', STOP)
     assert sent.commands()[-2:] == [(0.2, 0.0), ZERO]
-    # Ramped from where the last command left it: a turn after the stop ramps from zero,
-    # and the time since the last command counts at most command_timeout.
+    # After a quiet spell (the watchdog's stop first), a turn ramps from zero by one frame's
+    # step, not by the whole quiet time.
     clock.t += 30.0
     gate.frame('point_left', Velocity(0.0, 3.0))
-    assert sent.commands()[-1] == pytest.approx((0.0, 2.0 * 0.5))
+    clock.t += 0.1
+    gate.frame('point_left', Velocity(0.0, 3.0))
+    assert sent.sent[-3:] == [(ZERO, TIMEOUT), (ZERO, FRAME), ((0.0, pytest.approx(0.2)), FRAME)]
+
+
+def test_a_reversal_is_never_sent_without_a_zero_first():
+    # One reason whose command changes sign (a step's own): a zero in between, as for a change
+    # of reason.
+    gate, sent, _ = gate_and_record(hold_frames=1)
+    gate.frame('steer', Velocity(0.5, 0.2))
+    gate.frame('steer', Velocity(0.5, -0.2))
+    gate.frame('steer', Velocity(0.5, -0.2))
+    assert sent.commands() == [(0.5, 0.2), ZERO, (0.5, -0.2)]
 
 
 def test_no_frame_for_command_timeout_sends_one_zero_then_nothing_until_frames_return():
@@ -226,6 +238,52 @@ def test_with_an_enable_input_the_robot_moves_only_while_it_is_fresh_and_true():
     clock.t += 0.4
     assert gate.frame('thumb_up', Velocity(1.0, 0.0)) == DISABLED
     assert sent.sent[-1] == (ZERO, DISABLED)
+
+
+def test_a_late_watchdog_changes_nothing_a_frame_or_an_enable_finds_the_deadline_passed():
+    # The watchdog's thread may run late (a loaded machine): whatever comes first after a
+    # deadline acts on it. An enable that lapsed unseen, then true again: a stop, held anew.
+    gate, sent, clock = gate_and_record(hold_frames=3, enable_timeout=0.5, command_timeout=60)
+    gate.enable(True)
+    show(gate, ['thumb_up'] * 3, clock=clock, period=0.05)
+    clock.t += 0.6
+    gate.enable(True)
+    show(gate, ['thumb_up'], clock=clock)
+    assert sent.sent[-2:] == [(ZERO, DISABLED), (ZERO, HELD_BACK)]
+    # A frame after command_timeout without one: the watchdog's stop first, held anew.
+    gate, sent, clock = gate_and_record(hold_frames=3, command_timeout=0.5)
+    show(gate, ['thumb_up'] * 3, clock=clock, period=0.05)
+    clock.t += 2.0
+    show(gate, ['thumb_up'], clock=clock)
+    assert sent.sent[-2:] == [(ZERO, TIMEOUT), (ZERO, HELD_BACK)]
+
+
+def test_with_a_command_rate_the_last_frames_command_goes_out_again_until_the_timeout():
+    # A board processing 2 frames a second, a base that stops after 0.5 s without a command:
+    # the command again 10 times a second, ramping on, until the next frame or the timeout.
+    gate, sent, clock = gate_and_record(hold_frames=1, command_rate=10.0, command_timeout=1.0,
+                                        limits=Limits(linear_accel=1.0))
+    show(gate, ['no_hand'], clock=clock, period=0.5)
+    gate.frame('thumb_up', Velocity(1.0, 0.0))
+    for _ in range(4):
+        clock.t += 0.1
+        assert gate.check() == pytest.approx(0.1)
+    forward = [round(command[0], 6) for command in sent.commands()]
+    assert forward == [0.0, 0.5, 0.6, 0.7, 0.8, 0.9]
+    assert sent.reasons()[2:] == [RESENT] * 4
+    # The timeout, measured from the last frame's command, ends it: the stop, then quiet.
+    for _ in range(10):
+        clock.t += 0.1
+        gate.check()
+    assert sent.sent[-1] == (ZERO, TIMEOUT)
+    count = len(sent.sent)
+    clock.t += 5.0
+    assert gate.check() is None and len(sent.sent) == count
+    # A frame's zero goes out again too (the input stays alive in a twist_mux), not the
+    # gate's own stop's.
+    show(gate, ['no_hand'], clock=clock, period=0.1)
+    gate.check()
+    assert sent.sent[-2:] == [(ZERO, FRAME), (ZERO, RESENT)]
 
 
 def test_each_stop_goes_out_in_copies_then_nothing():
@@ -356,7 +414,7 @@ class Timed:
             return self.changed.wait_for(lambda: len(self.sent) >= count, timeout)
 
 
-def test_the_watchdog_thread_keeps_the_deadline_while_the_thread_that_sends_frames_is_busy():
+def test_the_watchdog_thread_keeps_the_deadline_on_its_own():
     # Real threads, real clock: the watchdog wakes for the deadline on its own (no executor, no
     # other thread calling check()); its zero and copies come once the timeout has passed. A
     # bound that a watchdog ten times too slow cannot meet, loose enough for a loaded machine.
@@ -373,3 +431,23 @@ def test_the_watchdog_thread_keeps_the_deadline_while_the_thread_that_sends_fram
     gate.stop()
     assert watchdog.join(2.0)
     assert len(sent.sent) == 4   # the watchdog's zero was the last word: no stop zero
+
+
+def test_the_watchdog_thread_outlives_a_send_that_raises():
+    # The middleware failing under the watchdog (a context shut down): said, tried again, and
+    # the thread goes on until the gate is stopped.
+    sent = Timed()
+    failures = []
+
+    def send(command, why):
+        if why == TIMEOUT and not failures:
+            raise RuntimeError('publisher gone')
+        sent(command, why)
+    gate = CommandGate(send, GateSettings(hold_frames=1, command_timeout=0.1, stop_repeats=1))
+    watchdog = Watchdog(gate, on_error=failures.append)
+    gate.frame('thumb_up', Velocity(1.0, 0.0))
+    assert sent.wait_for(2, timeout=5.0), sent.sent
+    assert [type(error) for error in failures] == [RuntimeError]
+    assert sent.sent[-1][2] == TIMEOUT
+    gate.stop()
+    assert watchdog.join(2.0)

@@ -160,8 +160,9 @@ class SignsUnderTest:
     """
     A HandSigns started on a FakeNode with a stand-in tracker, and what it published.
 
-    Its gate runs on a fake clock (its watchdog thread, waiting on real time, finds nothing due
-    unless the test moves the clock); one copy of each stop and no hold_time unless asked.
+    Its gate runs on a fake clock from the start (its watchdog thread, waiting on real time,
+    finds nothing due unless the test moves the clock); one copy of each stop and no hold_time
+    unless asked.
     """
 
     def __init__(self, frame_age=lambda: 0.01, **parameters):
@@ -169,11 +170,11 @@ class SignsUnderTest:
         self.step = HandSigns()
         self.age = frame_age
         parameters = dict({'stop_repeats': 1, 'hold_time': 0.0}, **parameters)
+        self.clock = self.step.clock = FakeClock()
+        self.step.sleep = self.clock.sleep
         self.note = self.step.start(StepContext(
             node=self.node, logger=None, parameters=defaults(HandSigns, **parameters),
             frame_age=lambda: self.age()))
-        self.clock = self.step.gate.clock = FakeClock()
-        self.step.gate.sleep = self.clock.sleep
         self.step.tracker = FakeTracker()
         self.signs = self.node.publishers['hand_sign']
         self.twists = self.node.publishers[self.step.settings['cmd_vel_topic']]
