@@ -65,7 +65,8 @@ import time
 from typing import Callable, Hashable, NamedTuple, Optional
 
 __all__ = ['CommandGate', 'DISABLED', 'FAILED', 'FRAME', 'GateSettings', 'HELD_BACK', 'Limits',
-           'REPEAT', 'RESENT', 'STALE', 'STOP', 'STOPPED', 'TIMEOUT', 'Velocity', 'Watchdog']
+           'REPEAT', 'RESENT', 'STALE', 'STOP', 'STOPPED', 'TIMEOUT', 'Velocity', 'WATCH_RETRY_S',
+           'Watchdog']
 
 # Why a command went out (what `send` is told, and what `frame()` returns).
 FRAME = 'frame'          # the frame's own command (moving: held long enough; or a zero)
@@ -80,7 +81,7 @@ RESENT = 'resent'        # the last frame's command again (command_rate), until 
 NOTHING = None           # nothing sent
 # Times are sums of float seconds: a sign held hold_time to the microsecond has held it.
 _CLOCK_SLACK_S = 1e-6
-# How soon the watchdog tries again after a send raised.
+# How soon the watchdog tries again after a send raised or was dropped.
 WATCH_RETRY_S = 0.1
 
 
@@ -330,7 +331,10 @@ class CommandGate:
         if settings.enable_timeout is not None and self._enabled:
             waits.append(self._enabled_at + settings.enable_timeout - now)
         if self._armed:
-            waits.append(self._last_command_at + settings.command_timeout - now)
+            # Still armed past the deadline: its stop was dropped (the node is stopping, and
+            # stop() sends it): look again a little later rather than at once, again and again.
+            left = self._last_command_at + settings.command_timeout - now
+            waits.append(left if left > 0.0 else WATCH_RETRY_S)
         if self._copies_left and now >= self._next_copy_at:
             if self._send(STOP, REPEAT) is not False:
                 self._last, self._last_sent_at = STOP, now

@@ -27,7 +27,7 @@ import time
 from fake_clock import FakeClock
 from py_vision.steps.commands import CommandGate, DISABLED, FAILED, FRAME, GateSettings
 from py_vision.steps.commands import HELD_BACK, Limits, REPEAT, RESENT, STALE, STOP, STOPPED
-from py_vision.steps.commands import TIMEOUT, Velocity, Watchdog
+from py_vision.steps.commands import TIMEOUT, Velocity, WATCH_RETRY_S, Watchdog
 import pytest
 
 ZERO = (0.0, 0.0)
@@ -451,3 +451,19 @@ def test_the_watchdog_thread_outlives_a_send_that_raises():
     assert sent.sent[-1][2] == TIMEOUT
     gate.stop()
     assert watchdog.join(2.0)
+
+
+def test_a_dropped_stop_is_tried_again_later_not_in_a_spin():
+    # The node silencing the step's publishers just before stop(): the watchdog's stop is
+    # dropped, and the watchdog looks again WATCH_RETRY_S later, not at once over and over.
+    dropping = []
+
+    def send(command, why):
+        return not dropping
+    clock = FakeClock()
+    gate = CommandGate(send, GateSettings(hold_frames=1, command_timeout=0.5), clock=clock,
+                       sleep=clock.sleep)
+    gate.frame('thumb_up', Velocity(1.0, 0.0))
+    dropping.append(True)
+    clock.t += 1.0
+    assert gate.check() == pytest.approx(WATCH_RETRY_S)
