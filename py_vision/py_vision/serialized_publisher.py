@@ -30,6 +30,7 @@ import ctypes
 from typing import Optional
 
 import numpy as np
+from py_vision.rcl_c import loaded_library, SerializedMessage
 from py_vision.serialized import SerializedStamped
 
 __all__ = ['SerializedPublisher', 'StampedPublisher']
@@ -37,46 +38,17 @@ __all__ = ['SerializedPublisher', 'StampedPublisher']
 _RCL_RET_OK = 0
 
 
-class _Allocator(ctypes.Structure):
-    """rcutils_allocator_t: four functions and a state pointer (unused by publishing)."""
-
-    _fields_ = [('allocate', ctypes.c_void_p), ('deallocate', ctypes.c_void_p),
-                ('reallocate', ctypes.c_void_p), ('zero_allocate', ctypes.c_void_p),
-                ('state', ctypes.c_void_p)]
-
-
-class _SerializedMessage(ctypes.Structure):
-    """rcl_serialized_message_t (rcutils_uint8_array_t): the bytes, their length, capacity."""
-
-    _fields_ = [('buffer', ctypes.c_void_p), ('buffer_length', ctypes.c_size_t),
-                ('buffer_capacity', ctypes.c_size_t), ('allocator', _Allocator)]
-
-
-def _loaded_library(name: str) -> Optional[str]:
-    """Return the path of the shared library `name` (librcl.so) this process has loaded."""
-    try:
-        with open('/proc/self/maps') as maps:
-            for line in maps:
-                path = line.rstrip('\n').split(None, 5)[-1]
-                if path.rsplit('/', 1)[-1] == name:
-                    return path
-    except OSError:
-        pass
-    return None
-
-
 def _rcl_publish():
     """Return rcl_publish_serialized_message from the process' librcl, or None."""
     if not hasattr(_rcl_publish, 'function'):
         function = None
-        path = _loaded_library('librcl.so')
-        if path is not None:
-            try:
-                function = ctypes.CDLL(path).rcl_publish_serialized_message
-            except (OSError, AttributeError):
-                function = None
+        try:
+            rcl = loaded_library('librcl.so')
+            function = rcl.rcl_publish_serialized_message if rcl is not None else None
+        except (OSError, AttributeError):
+            function = None
         if function is not None:
-            function.argtypes = [ctypes.c_void_p, ctypes.POINTER(_SerializedMessage),
+            function.argtypes = [ctypes.c_void_p, ctypes.POINTER(SerializedMessage),
                                  ctypes.c_void_p]
             function.restype = ctypes.c_int
         _rcl_publish.function = function
@@ -93,7 +65,7 @@ class SerializedPublisher:
     def __init__(self, publisher):
         self.publisher = publisher
         self._publish = _rcl_publish()
-        self._message = _SerializedMessage()
+        self._message = SerializedMessage()
         self._pointer = ctypes.byref(self._message)
         self._where = (0, 0)
         self._handle = getattr(publisher, 'handle', None)
