@@ -13,8 +13,9 @@
 # limitations under the License.
 
 """
-What py_vision reaches of rcl's C API directly: the libraries rclpy loaded, and the C layout
-of a serialized message (rcl_serialized_message_t, the same on Humble and Jazzy).
+rcl's C API where py_vision calls it directly: the libraries rclpy loaded, a message's layout.
+
+A serialized message is rcl_serialized_message_t, whose C layout Humble and Jazzy share.
 
 serialized_take (a subscription's messages taken into memory of our own) and
 serialized_publisher (messages published from it) bind their functions from here.
@@ -42,7 +43,7 @@ class SerializedMessage(ctypes.Structure):
 
 
 def loaded_library(name: str) -> Optional[ctypes.CDLL]:
-    """Return the shared library of that file name (librcl.so) this process has loaded, or None."""
+    """Return the shared library of that file name (librcl.so) the process has loaded, or None."""
     try:
         with open('/proc/self/maps') as maps:
             for line in maps:

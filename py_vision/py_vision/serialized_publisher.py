@@ -27,7 +27,6 @@ call. Where this is not possible (no librcl in the process, an rclpy without `po
 """
 
 import ctypes
-from typing import Optional
 
 import numpy as np
 from py_vision.rcl_c import loaded_library, SerializedMessage
