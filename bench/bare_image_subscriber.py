@@ -19,10 +19,10 @@ Usage: bare_image_subscriber.py OUT.json RELIABILITY [--py-vision-profile] [--ro
 Subscribes to usb_camera/image (sensor_msgs/Image) and records, per message, the monotonic
 arrival time, the frame index (header.frame_id when it is a number, as the reference publisher
 sends it, else decoded from the synthetic source's image) and the latency from header.stamp to
-the callback. Prints FIRST_FRAME_MARK at the first frame and writes OUT.json on SIGINT/SIGTERM.
-With --py-vision-profile it runs on the Fast DDS profile usbcam_subscriber gives itself
-(py_vision.dds, tailored the same way: the reference of bench_receive.py); without, on what
-the environment says.
+the callback, and the first message's encoding. Prints FIRST_FRAME_MARK at the first frame and
+writes OUT.json on SIGINT/SIGTERM. With --py-vision-profile it runs on the Fast DDS profile
+usbcam_subscriber gives itself (py_vision.dds, tailored the same way: the reference of
+bench_receive.py); without, on what the environment says.
 """
 
 import sys
@@ -43,6 +43,7 @@ class Recorder:
     def __init__(self, node):
         self.clock = node.get_clock()
         self.events = []
+        self.encoding = None
 
     def frame_index(self, msg):
         if msg.header.frame_id.isdigit():
@@ -57,6 +58,7 @@ class Recorder:
         arrival = monotonic()
         stamp_ns = msg.header.stamp.sec * 1000000000 + msg.header.stamp.nanosec
         if not self.events:
+            self.encoding = msg.encoding
             announce_first_frame()
         self.events.append((arrival, self.frame_index(msg), (now_ns - stamp_ns) / 1e9))
 
@@ -87,7 +89,7 @@ def main():
         while not stop.is_set():
             executor.spin_once(timeout_sec=0.1)
     finally:
-        write_json(out, {'received': recorder.events})
+        write_json(out, {'received': recorder.events, 'encoding': recorder.encoding})
         node.destroy_node()
         rclpy.try_shutdown()
 

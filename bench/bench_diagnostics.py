@@ -21,7 +21,8 @@ Measure what publishing /diagnostics costs: usbcam_publisher with and without it
    directly --calls times in this process (CPU time per call, so CPU per second at 1 Hz).
 2. The node: usbcam_publisher as installed on the synthetic camera (640x480 at 30 fps, a
    subscriber on /diagnostics in this process so that the reports are sent), and the same
-   node with its diagnostics timer removed, one after the other, --rounds times each,
+   node publishing no reports (its timer, which syncs the control parameters too, left),
+   one after the other, --rounds times each,
    alternating; CPU (utime + stime from /proc) per second over --duration seconds after
    a settling time. The difference is the diagnostics' cost, the node without them the
    reference, both measured in this run.
@@ -49,11 +50,11 @@ def run_node(diagnostics):
     from py_vision.usbcam_publisher import USBImagePublisher
 
     class WithoutDiagnostics(USBImagePublisher):
-        """usbcam_publisher whose /diagnostics timer is removed as soon as it is made."""
+        """usbcam_publisher that never publishes /diagnostics (its timer still syncs controls)."""
 
         def _setup(self, values):
             super()._setup(values)
-            self.diagnostics.close()
+            self.diagnostics.publish = lambda: None
 
     node_class = USBImagePublisher if diagnostics == 'on' else WithoutDiagnostics
     sys.exit(node_main.run(node_class, args=sys.argv[:1] + sys.argv[3:]))

@@ -63,7 +63,7 @@ class BenchPublisherNoInfo(BenchPublisher):
 
     def __init__(self):
         super().__init__()
-        self.info_publisher = _NoInfo()  # from the first measured frame on
+        self.camera_infos = _NoInfo()  # from the first measured frame on
 
 
 class BenchSubscriber(VideoSubscriber):

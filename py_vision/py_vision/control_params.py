@@ -130,6 +130,8 @@ class ControlParameters:
         self._names = ControlNames(())
         self._by_id: Dict[int, ControlInfo] = {}   # the controls as last read
         self._specs: Dict[str, Spec] = {}
+        # What the device said at the last sync that the parameters show (None: not yet).
+        self._shown: Optional[List[ControlInfo]] = None
 
     @property
     def names(self) -> List[str]:
@@ -204,6 +206,9 @@ class ControlParameters:
         A camera that is lost answers nothing here: the capture loop keeps the values and
         applies them when it is back (a button's press it refuses: it cannot wait).
         """
+        # The parameters may now say what the device does not (a button reads back false):
+        # the next sync shows the device's values again, changed or not.
+        self._shown = None
         controls = self._camera.controls()
         by_id = {control.cid: control for control in controls} or self._by_id
         values = self._names.to_device(changes, by_id)
@@ -244,6 +249,8 @@ class ControlParameters:
         controls = self._camera.controls()
         if not controls:
             return  # the camera is lost: the parameters keep the last values
+        if controls == self._shown:
+            return  # nothing changed on the device: the parameters show it already
         by_id = self._by_id = {control.cid: control for control in controls}
         values, changed = {}, []
         for name, old in self._specs.items():
@@ -255,3 +262,4 @@ class ControlParameters:
                 changed.append(spec)
                 self._specs[name] = spec
         self._parameters.show(values, changed)
+        self._shown = controls

@@ -24,7 +24,7 @@ OK, WARN, ERROR or STALE, a one-line `message`, and key/value pairs.
 
 import collections
 from dataclasses import dataclass, field
-from typing import Callable, Dict, List, Tuple
+from typing import Callable, Dict, List, Optional, Tuple
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from py_vision.params import Parameters
@@ -90,17 +90,19 @@ class Diagnostics:
 
     `add(what, report)` registers `report()`, which returns a Status; it runs on the node's
     executor at every period. A report that raises is published as ERROR naming the error,
-    so a broken status function shows instead of hiding the rest.
+    so a broken status function shows instead of hiding the rest. With period_s None there is
+    no timer: the node calls publish() about once a second from a timer of its own (one
+    executor wake-up for both).
     """
 
     def __init__(self, parameters: Parameters, hardware_id: str = '',
-                 period_s: float = PERIOD_S):
+                 period_s: Optional[float] = PERIOD_S):
         node = self._node = parameters.node
         self.hardware_id = hardware_id
         self._reports: List[Tuple[str, Callable[[], Status]]] = []
         self.publisher = create_publisher(parameters, DiagnosticArray, DIAGNOSTICS_TOPIC,
                                           QoSProfile(depth=10))
-        self._timer = node.create_timer(period_s, self.publish)
+        self._timer = None if period_s is None else node.create_timer(period_s, self.publish)
 
     def add(self, what: str, report: Callable[[], Status]) -> None:
         """Register report() as the status "<node name>: <what>"."""
@@ -132,4 +134,5 @@ class Diagnostics:
 
     def close(self) -> None:
         """Stop publishing (the node destroys the publisher with itself)."""
-        self._node.destroy_timer(self._timer)
+        if self._timer is not None:
+            self._node.destroy_timer(self._timer)

@@ -31,10 +31,10 @@ does.
 """
 
 import ctypes
-import os
 from typing import Optional
 
 import numpy as np
+from py_vision.rcl_c import Allocator, loaded_library, SerializedMessage
 
 __all__ = ['SerializedTake', 'TakeError']
 
@@ -44,32 +44,6 @@ _MARGIN = 4096       # room over the last message's size, so a slightly larger o
 
 class TakeError(RuntimeError):
     """rcl could not take a message (a status other than "nothing to take")."""
-
-
-class _Allocator(ctypes.Structure):
-    _fields_ = [('allocate', ctypes.c_void_p), ('deallocate', ctypes.c_void_p),
-                ('reallocate', ctypes.c_void_p), ('zero_allocate', ctypes.c_void_p),
-                ('state', ctypes.c_void_p)]
-
-
-class _SerializedMessage(ctypes.Structure):
-    """rcl_serialized_message_t, that is rcutils_uint8_array_t."""
-
-    _fields_ = [('buffer', ctypes.c_void_p), ('buffer_length', ctypes.c_size_t),
-                ('buffer_capacity', ctypes.c_size_t), ('allocator', _Allocator)]
-
-
-def _loaded(name: str) -> Optional[ctypes.CDLL]:
-    """Return the library of that file name this process has loaded, or None."""
-    try:
-        with open('/proc/self/maps') as maps:
-            for line in maps:
-                path = line.split()[-1]
-                if os.path.basename(path) == name:
-                    return ctypes.CDLL(path)
-    except OSError:
-        pass
-    return None
 
 
 class _C:
@@ -82,7 +56,7 @@ class _C:
     def bind(cls) -> bool:
         if cls.take is not None or cls.failed is not None:
             return cls.failed is None
-        rcl, rcutils = _loaded('librcl.so'), _loaded('librcutils.so')
+        rcl, rcutils = loaded_library('librcl.so'), loaded_library('librcutils.so')
         if rcl is None or rcutils is None:
             cls.failed = 'librcl.so or librcutils.so is not loaded'
             return False
@@ -93,10 +67,10 @@ class _C:
             libc.free.restype = None
             libc.free.argtypes = [ctypes.c_void_p]
             get_allocator = rcutils.rcutils_get_default_allocator
-            get_allocator.restype = _Allocator
+            get_allocator.restype = Allocator
             take = rcl.rcl_take_serialized_message
             take.restype = ctypes.c_int
-            take.argtypes = [ctypes.c_void_p, ctypes.POINTER(_SerializedMessage),
+            take.argtypes = [ctypes.c_void_p, ctypes.POINTER(SerializedMessage),
                              ctypes.c_void_p, ctypes.c_void_p]
         except AttributeError as error:
             cls.failed = str(error)
@@ -142,7 +116,7 @@ class SerializedTake:
         address = _C.libc.malloc(self._capacity)
         if not address:
             raise MemoryError('no memory for a message of %d bytes' % self._capacity)
-        message = _SerializedMessage(address, 0, self._capacity, _C.allocator)
+        message = SerializedMessage(address, 0, self._capacity, _C.allocator)
         status = _C.take(handle.pointer, ctypes.byref(message), None, None)
         # rcl may have grown the buffer (realloc through the same allocator): it is this one.
         owned = _Owned(message.buffer, message.buffer_length)

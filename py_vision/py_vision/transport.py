@@ -39,6 +39,8 @@ from py_vision.cv_bridge import fill_message_data, share_message_data
 from py_vision.frame_memory import FrameStream
 from py_vision.params import Parameters, Spec
 from py_vision.qos import create_publisher, ImageSubscription
+from py_vision.serialized import SerializedImage
+from py_vision.serialized_publisher import SerializedPublisher
 from py_vision.throttled_log import ThrottledLog
 from sensor_msgs.msg import CompressedImage, Image
 
@@ -100,6 +102,12 @@ class ImagePublisher:
     """
     Raw and compressed publishers of one base topic, each used only while it has readers.
 
+    Raw images go out serialized (py_vision.serialized): the Image's bytes are kept in a
+    buffer of the publisher's own, reused frame after frame, and the pixels are written into
+    it once (by the conversion itself where the caller can convert into it, `into`), then
+    handed to the middleware as they are (SerializedPublisher). Where rclpy does not allow that
+    they go out as an Image message holding the pixels, which rclpy copies.
+
     With lazy_raw False the raw image is published whatever its subscribers (a benchmark's
     stream, whose cost must not depend on who listens).
     """
@@ -118,6 +126,13 @@ class ImagePublisher:
         # The last raw message and its layout: frame after frame of one layout, only its
         # header and data change (the bridge checked the layout once).
         self._raw_msg, self._raw_layout = None, None
+        self._serialized = SerializedPublisher(self.raw)
+        self._image = SerializedImage()
+        # The fields of the last image's message (height, width, encoding, step, is_bigendian,
+        # size) and its pixels' place in the serialized message: (its bytes, them shaped as
+        # the image).
+        self._fields = None
+        self._pixels = None
 
     def _raw_message(self, pixels: np.ndarray, encoding: str) -> Image:
         """
@@ -134,6 +149,57 @@ class ImagePublisher:
             share_message_data(self._raw_msg, pixels)
         return self._raw_msg
 
+    def _publish_raw(self, header, image, encoding, into) -> bool:
+        """Publish the raw image; False when it is not a whole image (nothing published)."""
+        if not self._serialized.available:
+            pixels = image()
+            if pixels is None:
+                return False
+            msg = self._raw_message(pixels, encoding)
+            msg.header = header
+            try:
+                self.raw.publish(msg)
+            finally:
+                # The message is kept for the next frame, its bytes not: they may be the
+                # camera's buffer, which must be unmapped when the camera is released.
+                share_message_data(msg, _NO_PIXELS)
+            return True
+        if into is not None and self._fields is not None and self._raw_layout[2] == encoding:
+            # Written straight into the message laid out as the last frame's.
+            out = self._pixels_out(header)
+            pixels = into(out)
+            if pixels is out:
+                self._serialized.publish_at(*self._image.where())
+                return True
+        else:
+            pixels = image()
+        if pixels is None:
+            return False
+        self._lay_out(pixels, encoding)
+        out = self._pixels_out(header)
+        np.copyto(out, pixels)
+        self._serialized.publish_at(*self._image.where())
+        return True
+
+    def _lay_out(self, pixels: np.ndarray, encoding: str) -> None:
+        """Take pixels' layout for the messages from now on (the bridge checks it once)."""
+        layout = (pixels.shape, pixels.dtype.str, encoding)
+        if layout != self._raw_layout:
+            msg = self._bridge.cv2_to_imgmsg(pixels, encoding, share=True)
+            self._fields = (msg.height, msg.width, msg.encoding, msg.step, msg.is_bigendian,
+                            pixels.nbytes)
+            self._raw_layout = layout
+            self._pixels = None
+
+    def _pixels_out(self, header) -> np.ndarray:
+        """Lay the message out with header; return its pixel bytes, shaped as the image."""
+        self._image.prepare(header, *self._fields)
+        data = self._image.data()
+        if self._pixels is None or self._pixels[0] is not data:
+            shape, dtype, _ = self._raw_layout
+            self._pixels = (data, data.view(dtype).reshape(shape))
+        return self._pixels[1]
+
     def wants_raw(self) -> bool:
         """Return True while the raw topic has subscribers."""
         return self.raw.get_subscription_count() > 0
@@ -144,29 +210,24 @@ class ImagePublisher:
 
     def publish(self, header, image: Callable[[], Optional[np.ndarray]],
                 jpeg: Optional[np.ndarray] = None, encoding: str = 'bgr8',
-                picture: Optional[Callable[[], Optional[np.ndarray]]] = None
+                picture: Optional[Callable[[], Optional[np.ndarray]]] = None,
+                into: Optional[Callable[[np.ndarray], Optional[np.ndarray]]] = None
                 ) -> Tuple[bool, bool]:
         """
         Publish one frame with header to the topics that have subscribers.
 
-        image() returns the pixels in `encoding` (it may convert or decode); jpeg is the
-        camera's own JPEG, published as it is; picture() returns the 8-bit picture (BGR, or one
-        channel for a grey one) a JPEG is encoded from when there is none (image() when not
-        given: `encoding` is bgr8 or mono8 then). Returns (raw published, compressed published).
+        image() returns the pixels in `encoding` (it may convert or decode); into(out), when
+        given, writes them into out instead, an array shaped as the last frame's image (the
+        message's own bytes), and returns out, or the image in an array of its own where it
+        does not fit out, or None as image() does; jpeg is the camera's own JPEG, published as
+        it is; picture() returns the 8-bit picture (BGR, or one channel for a grey one) a JPEG
+        is encoded from when there is none (image() when not given: `encoding` is bgr8 or
+        mono8 then). Returns (raw published, compressed published).
         """
         raw_done = compressed_done = False
         if self.wants_raw() or not self._lazy_raw:
-            pixels = image()
-            if pixels is None:
+            if not self._publish_raw(header, image, encoding, into):
                 return False, False  # not a whole image (a JPEG that does not decode): no part
-            msg = self._raw_message(pixels, encoding)
-            msg.header = header
-            try:
-                self.raw.publish(msg)
-            finally:
-                # The message is kept for the next frame, its bytes not: they may be the
-                # camera's buffer, which must be unmapped when the camera is released.
-                share_message_data(msg, _NO_PIXELS)
             raw_done = True
         if self.wants_compressed():
             what = JPEG_FORMAT

@@ -47,7 +47,9 @@ state (node_main calls close()).
 
 import sys
 import time
+from typing import Tuple
 
+from builtin_interfaces.msg import Time as TimeMsg
 import cv2
 from py_vision import dds, ros_arguments
 from py_vision.calibration import CameraInfoManager, is_valid_camera_name
@@ -60,17 +62,17 @@ from py_vision.capture.pixel_formats import find, names_accepted, OUTPUTS
 from py_vision.control_names import pixel_format_fourcc, USB_CAM_PIXEL_FORMATS
 from py_vision.control_params import ALIAS_HELP, ControlParameters
 from py_vision.cv_bridge import CvBridge
-from py_vision.diagnostics import Diagnostics
+from py_vision.diagnostics import Diagnostics, PERIOD_S as DIAGNOSTICS_PERIOD_S
 from py_vision.listing import device_listing, devices_listing
 from py_vision.node_main import ConfigError, main_for
 from py_vision.params import Parameters, Spec
 from py_vision.qos import create_publisher, publisher_qos, RELIABILITY
+from py_vision.serialized_publisher import StampedPublisher
 from py_vision.transport import ImagePublisher, sibling_topic
 import rclpy
 from rclpy.lifecycle import LifecycleNodeMixin, TransitionCallbackReturn
 from rclpy.logging import get_logger
 from rclpy.node import Node
-from rclpy.time import Time
 from sensor_msgs.msg import CameraInfo
 from sensor_msgs.srv import SetCameraInfo
 from std_msgs.msg import Header
@@ -81,14 +83,18 @@ MANAGED = Spec('managed', False, 'run as a lifecycle node: configure opens the c
                'releases the camera and the publishers (ros2 lifecycle set)')
 SUCCESS = TransitionCallbackReturn.SUCCESS
 FAILURE = TransitionCallbackReturn.FAILURE
-# How often the control parameters are brought up to date with the device's values.
+# How often the control parameters are brought up to date with the device's values; every
+# DIAGNOSTICS_TICKS-th time /diagnostics is published too (once a second): one timer, one
+# executor wake-up for both (a wake-up of rclpy's executor costs this node more than either).
 CONTROL_SYNC_PERIOD_S = 0.5
+DIAGNOSTICS_TICKS = round(DIAGNOSTICS_PERIOD_S / CONTROL_SYNC_PERIOD_S)
 # After shutdown the process ends this much later, once the answer to the transition request
 # has gone out (ending rclpy at once could lose it, and `ros2 lifecycle set` would wait).
 EXIT_AFTER_SHUTDOWN_S = 0.5
 # A TF frame name: what tf2 and every viewer take, and what survives a C string (no NUL).
 FRAME_ID_RULE = '1 to 256 printable characters, without spaces'
 _MAX_FRAME_ID = 256
+_NS = 1000000000
 
 
 def good_frame_id(frame_id: str) -> bool:
@@ -213,8 +219,13 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
                                    name=self.video_device, on_failure=self._capture_failed,
                                    on_refused=self._controls_refused)
         self._monitor = CameraMonitor()
-        self.diagnostics = Diagnostics(self._params, hardware_id=self.video_device)
+        self._clock = self.get_clock()
+        self._header = Header(frame_id=self.frame_id)
+        self.diagnostics = Diagnostics(self._params, hardware_id=self.video_device,
+                                       period_s=None)
         self.diagnostics.add('camera', self.camera_status)
+        self._ticks = 0
+        self.create_timer(CONTROL_SYNC_PERIOD_S, self._tick)
 
     def _make_publishers(self):
         """Create the image, compressed and camera_info publishers."""
@@ -227,6 +238,7 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
                                      self.output_encoding)
         self.info_publisher = create_publisher(
             self._params, CameraInfo, sibling_topic(self, IMAGE_TOPIC, 'camera_info'), qos)
+        self.camera_infos = StampedPublisher(self.info_publisher)
 
     def _configure_camera(self):
         """Open and negotiate the camera, with the controls set; ConfigError if it fails."""
@@ -243,7 +255,16 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
                                      self.video_device)
         controls.declare(set(self.values))  # ConfigError: a mistyped value, declared nothing
         self.controls = controls
-        self.create_timer(CONTROL_SYNC_PERIOD_S, self.controls.sync)
+
+    def _tick(self):
+        """Bring the control parameters up to date (once configured); publish /diagnostics."""
+        self._ticks += 1
+        try:
+            if self.controls is not None:
+                self.controls.sync()
+        finally:
+            if self._ticks % DIAGNOSTICS_TICKS == 0:
+                self.diagnostics.publish()
 
     def _controls_refused(self, refusals):
         """Say which controls a reopened camera did not take again (the capture loop's)."""
@@ -334,48 +355,59 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
                 pass
         # else: Ctrl-C or SIGTERM shut rclpy down while a frame was being published.
 
-    def _capture_stamp(self, captured):
+    def _capture_stamp(self, captured) -> Tuple[int, int]:
         """
         Return the capture time (time.monotonic(), or None) of a frame on the node's clock.
 
-        The node's clock now, less the frame's age. A simulated clock (use_sim_time, /clock)
-        does not run with the camera's time: there, and on a clock too young to hold the age
-        (a simulation starting at 0), the frame is stamped with the clock's time now, so that
-        stamps follow the clock wherever it goes (also back, when a bag loops).
+        As (sec, nanosec): the node's clock now, less the frame's age. Without a simulation
+        the node's clock (ROS time) is the system's (CLOCK_REALTIME), which time.time_ns()
+        reads without the rclpy objects clock.now() makes. A simulated clock (use_sim_time,
+        /clock) does not run with the camera's time: there, and on a clock too young to hold
+        the age (a simulation starting at 0), the frame is stamped with the clock's time now,
+        so that stamps follow the clock wherever it goes (also back, when a bag loops).
         """
-        clock = self.get_clock()
+        clock = self._clock
         if captured is None or clock.ros_time_is_active:
-            return clock.now()  # no capture time (the read has just returned it), or simulated
+            # No capture time (the read has just returned it), or simulated.
+            return divmod(clock.now().nanoseconds, _NS)
         # The two clocks read as close together as the thread is let: a read pair cut by a
         # preemption (a loaded machine) would move the stamp by as much, so it is read again.
         for _ in range(3):
             before = time.monotonic()
-            now = clock.now()
+            now = time.time_ns()
             after = time.monotonic()
             if after - before < 2e-4:
                 break
         age_ns = int(((before + after) / 2 - captured) * 1e9)
-        if not 0 <= age_ns < 1000000000 or age_ns > now.nanoseconds:
-            return now
-        return Time(nanoseconds=now.nanoseconds - age_ns, clock_type=now.clock_type)
+        if not 0 <= age_ns < _NS or age_ns > now:
+            return divmod(now, _NS)
+        return divmod(now - age_ns, _NS)
 
     def publish_image(self, camera, frame):
         """Publish one frame: image (raw and compressed, as subscribed) and its CameraInfo."""
-        header = Header(stamp=self._capture_stamp(frame.capture_time).to_msg(),
-                        frame_id=self.frame_id)
+        sec, nanosec = self._capture_stamp(frame.capture_time)
         if frame.pixel_format.video:
-            # An access unit: out as it is; images come from its decoder (camera_video).
+            # An access unit: out as it is; images come from its decoder (camera_video), which
+            # keeps the unit's header until its picture comes out: a header of its own.
+            header = Header(stamp=TimeMsg(sec=sec, nanosec=nanosec), frame_id=self.frame_id)
             raw = compressed = False
             self.video.publish(header, frame.data)
         else:
+            # One header for every frame: what holds it (the image, its compressed form, the
+            # CameraInfo) is published before the next frame changes it.
+            header = self._header
+            stamp = header.stamp
+            stamp.sec, stamp.nanosec = sec, nanosec
+            if header.frame_id != self.frame_id:
+                header.frame_id = self.frame_id
             output, picture = self.output_encoding, frame.pixel_format.picture
             raw, compressed = self.images.publish(
                 header, lambda: frame.image(output), frame.jpeg, frame.encoding(output),
-                lambda: frame.image(picture))
+                lambda: frame.image(picture), lambda out: frame.image(output, out))
             self.frames_decoded += frame.decoded
         info = self.calibration.camera_info(camera.width, camera.height)
         info.header = header
-        self.info_publisher.publish(info)
+        self.camera_infos.publish(info)
         self.raw_published += raw
         self.compressed_published += compressed
 

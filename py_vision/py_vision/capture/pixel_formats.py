@@ -23,11 +23,13 @@ Jazzy's define mono8, mono16, rgb8, bgr8, the 8-bit Bayer patterns, yuv422 for U
 yuv422_yuy2 for YUYV, nv21 and nv24), whether it is compressed, how its bytes lie in a buffer
 (`Plane`s: bytes per pixel across, pixels per row down, which also give its bus cost) and how
 it converts to bgr8, rgb8, mono8 and mono16 (OpenCV on a view of the buffer, with what that
-costs). A camera's own video (H.264, HEVC) is compressed and has no conversion of a frame on
-its own: its frames are decoded as a stream (video_decoder), and `auto` never chooses it.
-Negotiation (`auto`), listing, diagnostics, the frames, the synthetic camera and the
-emulated test cameras all read it; `from_yuyv` is how the test cameras make a format from their
-YUYV picture. A new format is one entry in `_table()`.
+costs), into a new array or into one given (`convert(view, output, out)`: a message's own
+bytes, so that a frame's pixels are written once on their way out). A camera's own video
+(H.264, HEVC) is compressed and has no conversion of a frame on its own: its frames are
+decoded as a stream (video_decoder), and `auto` never chooses it. Negotiation (`auto`),
+listing, diagnostics, the frames, the synthetic camera and the emulated test cameras all read
+it; `from_yuyv` is how the test cameras make a format from their YUYV picture. A new format is
+one entry in `_table()`.
 """
 
 from dataclasses import dataclass
@@ -37,8 +39,8 @@ import cv2
 import numpy as np
 
 __all__ = ['COLOUR_OUTPUTS', 'find', 'FORMATS', 'fourcc_code', 'fourcc_text', 'JPEG_FORMATS',
-           'names_accepted', 'nv24_as_yuyv', 'OPENCV_BGR', 'OUTPUTS', 'PixelFormat', 'Plane',
-           'VIDEO_FORMATS']
+           'names_accepted', 'nv24_as_yuyv', 'OPENCV_BGR', 'OUTPUTS', 'PixelFormat', 'placed',
+           'Plane', 'VIDEO_FORMATS']
 
 # What a frame converts to; 'native' is the camera's own pixels.
 OUTPUTS = ('bgr8', 'rgb8', 'mono8', 'mono16', 'native')
@@ -65,7 +67,9 @@ class Plane:
         return -(-height // self.down)
 
 
-Conversion = Tuple[int, Callable[[np.ndarray], np.ndarray]]
+# (cost, function(view, out=None)): the function returns the converted image, written into
+# `out` when given and the image fits it (same shape and type), else a new array.
+Conversion = Tuple[int, Callable[..., np.ndarray]]
 
 
 @dataclass(frozen=True, eq=False)   # each format is one object: compared and hashed by identity
@@ -179,13 +183,20 @@ class PixelFormat:
             offset += rows * plane_stride
         return np.concatenate(parts)
 
-    def convert(self, view: np.ndarray, output: str) -> np.ndarray:
-        """Return the image `view` (from view()) as `output`: bgr8, rgb8, mono8 or mono16."""
+    def convert(self, view: np.ndarray, output: str,
+                out: Optional[np.ndarray] = None) -> Optional[np.ndarray]:
+        """
+        Return the image `view` (from view()) as `output`: bgr8, rgb8, mono8, mono16, native.
+
+        With `out`, the image is written into it and `out` returned when it has the image's
+        shape and type; otherwise (a JPEG of another size) the image comes back in an array of
+        its own, `out` untouched. None: a compressed frame that does not decode.
+        """
         if output == 'native':
             if self.encoding is not None:
-                return view
+                return _same(view, out)
             output = self.native_encoding
-        return self.conversions[output][1](view)
+        return self.conversions[output][1](view, out)
 
 
 def fourcc_text(code: int) -> str:
@@ -201,30 +212,72 @@ def fourcc_code(fourcc: str) -> int:
 
 # --- conversions ---------------------------------------------------------------------------
 
-def _cvt(code_name: str) -> Conversion:
-    code = getattr(cv2, 'COLOR_' + code_name)
-    return CONVERT, lambda view: cv2.cvtColor(view, code)
+def _fits(image: Optional[np.ndarray], out: Optional[np.ndarray]) -> bool:
+    """Return True when out can hold image as it is (same shape, same type)."""
+    return out is not None and image is not None and image.shape == out.shape and (
+        image.dtype == out.dtype)
 
 
-def _same(view):
-    return view
-
-
-def _widen(view):
-    """8-bit to 16-bit as cv_bridge scales it (x 65535 / 255, i.e. x 257)."""
-    out = view.astype(np.uint16)
-    out *= 257
+def placed(image: Optional[np.ndarray], out: Optional[np.ndarray]) -> Optional[np.ndarray]:
+    """Return image copied into out where it fits, else image itself (None stays None)."""
+    if not _fits(image, out):
+        return image
+    np.copyto(out, image)
     return out
 
 
-def _narrow(view):
+def _cvt(code_name: str) -> Conversion:
+    code = getattr(cv2, 'COLOR_' + code_name)
+    return CONVERT, lambda view, out=None: _cvt_into(view, code, out)
+
+
+def _cvt_into(view, code, out=None):
+    """cv2.cvtColor into out; OpenCV makes an array of its own where out does not fit."""
+    if out is None:
+        return cv2.cvtColor(view, code)
+    image = cv2.cvtColor(view, code, dst=out)
+    # OpenCV hands back out itself, or a new array where out did not fit.
+    return out if image.__array_interface__['data'][0] == out.ctypes.data else image
+
+
+def _same(view, out=None):
+    return view if out is None else placed(view, out)
+
+
+def _widen(view, out=None):
+    """8-bit to 16-bit as cv_bridge scales it (x 65535 / 255, i.e. x 257)."""
+    if out is None or out.shape != view.shape or out.dtype != np.uint16:
+        out = None
+    return np.multiply(view, np.uint16(257), out=out, dtype=np.uint16)
+
+
+def _narrow(view, out=None):
     """16-bit to 8-bit as cv_bridge scales it (x 255 / 65535, rounded)."""
-    return cv2.convertScaleAbs(view, alpha=255.0 / 65535.0)
+    if out is None:
+        return cv2.convertScaleAbs(view, alpha=255.0 / 65535.0)
+    image = cv2.convertScaleAbs(view, dst=out, alpha=255.0 / 65535.0)
+    return out if image.__array_interface__['data'][0] == out.ctypes.data else image
+
+
+def _shift_right_2(view, out=None):
+    """10 bits in 16 to 8 bits."""
+    return placed((view >> 2).astype(np.uint8), out)
+
+
+def _shift_left_6(view, out=None):
+    """10 bits in 16 to 16 bits."""
+    if out is None or out.shape != view.shape or out.dtype != view.dtype:
+        return view << 6
+    return np.left_shift(view, 6, out=out)
 
 
 def _then(first: Conversion, second: Callable) -> Conversion:
     cost, step = first
-    return max(cost, CHEAP), lambda view: second(step(view))
+
+    def both(view, out=None):
+        image = step(view)
+        return None if image is None else second(image, out)
+    return max(cost, CHEAP), both
 
 
 def _yuv(suffix: str) -> Dict[str, Conversion]:
@@ -236,7 +289,7 @@ def _yuv(suffix: str) -> Dict[str, Conversion]:
 
 def _grey(mono8: Conversion, mono16: Conversion) -> Dict[str, Conversion]:
     def colour(code):
-        return _then(mono8, lambda view: cv2.cvtColor(view, code))
+        return _then(mono8, lambda view, out=None: _cvt_into(view, code, out))
     return {'mono8': mono8, 'mono16': mono16, 'bgr8': colour(cv2.COLOR_GRAY2BGR),
             'rgb8': colour(cv2.COLOR_GRAY2RGB)}
 
@@ -269,18 +322,21 @@ def nv24_as_yuyv(view):
 def _nv24() -> Dict[str, Conversion]:
     """NV24 through YUYV: OpenCV 4.6 has no NV24 conversion (its chroma is halved across)."""
     def through_yuyv(step):
-        return lambda view: step(nv24_as_yuyv(view))
+        return lambda view, out=None: step(nv24_as_yuyv(view), out)
     return {output: (CONVERT, through_yuyv(step)) for output, (_, step) in _yuv('YUYV').items()}
 
 
 def _jpeg() -> Dict[str, Conversion]:
+    # A JPEG decodes into an array of its own (cv2.imdecode takes none): copied into out.
     def decode(flag):
-        return DECODE, lambda data: cv2.imdecode(data, flag)
-    colour = decode(cv2.IMREAD_COLOR)
+        return DECODE, lambda data, out=None: placed(cv2.imdecode(data, flag), out)
+
+    def rgb(data, out=None):
+        image = cv2.imdecode(data, cv2.IMREAD_COLOR)
+        return None if image is None else _cvt_into(image, cv2.COLOR_BGR2RGB, out)
     gray = decode(cv2.IMREAD_GRAYSCALE)
-    return {'bgr8': colour,
-            'rgb8': (DECODE, lambda data: cv2.cvtColor(colour[1](data), cv2.COLOR_BGR2RGB)),
-            'mono8': gray, 'mono16': _then(gray, _widen)}
+    return {'bgr8': decode(cv2.IMREAD_COLOR), 'rgb8': (DECODE, rgb), 'mono8': gray,
+            'mono16': _then(gray, _widen)}
 
 
 # --- how the test cameras make each format from their YUYV picture --------------------------
@@ -367,7 +423,7 @@ _TWO = (Plane(2),)
 
 
 def _table():
-    shift16, shift10 = (VIEW, _same), (CHEAP, lambda view: view << 6)
+    shift16, shift10 = (VIEW, _same), (CHEAP, _shift_left_6)
     formats = [
         PixelFormat('YUYV', 'YUYV 4:2:2', 'yuv422_yuy2', _yuv('YUYV'), _PACKED_422, 2,
                     from_yuyv=_packed_422(('Y0', 'U', 'Y1', 'V'))),
@@ -394,7 +450,7 @@ def _table():
         PixelFormat('Y16', '16-bit Greyscale', 'mono16', _grey((CHEAP, _narrow), shift16),
                     _TWO, dtype='uint16', bits=16, mono=True, from_yuyv=_deep(8)),
         PixelFormat('Y10', '10-bit Greyscale', None,
-                    _grey((CHEAP, lambda view: (view >> 2).astype(np.uint8)), shift10),
+                    _grey((CHEAP, _shift_right_2), shift10),
                     _TWO, dtype='uint16', bits=10, mono=True, from_yuyv=_deep(2)),
     ]
     for fourcc, pattern, opencv_name in (('BA81', 'BGGR', 'RG'), ('GBRG', 'GBRG', 'GR'),

@@ -33,7 +33,7 @@ from typing import Dict, List, Optional, Protocol, Tuple
 
 import numpy as np
 from py_vision.capture.controls import ControlInfo
-from py_vision.capture.pixel_formats import find, PixelFormat
+from py_vision.capture.pixel_formats import find, PixelFormat, placed
 
 __all__ = ['BusFull', 'Clock', 'FrameFormat', 'FrameSize', 'FrameSource', 'Frame', 'MONOTONIC',
            'SourceError', 'StreamFormat']
@@ -173,17 +173,25 @@ class Frame:
         """Return the sensor_msgs encoding image(output) is in."""
         return self.pixel_format.native_encoding if output == 'native' else output
 
-    def image(self, output: str = 'bgr8') -> Optional[np.ndarray]:
-        """Return the frame as `output` (see the class's text); None if it is not a picture."""
+    def image(self, output: str = 'bgr8',
+              out: Optional[np.ndarray] = None) -> Optional[np.ndarray]:
+        """
+        Return the frame as `output` (see the class's text); None if it is not a picture.
+
+        With `out` (a message's pixel bytes, shaped as the image) the image is written there,
+        converted on the way, and `out` is returned; an image that does not fit it (another
+        size or type) comes back in an array of its own, `out` untouched. Either is the
+        frame's image from then on (valid while `out` is unchanged).
+        """
         images = self._images
         if images is None:
             images = self._images = {}
         image = images.get(output)
         if image is not None or self.corrupt or self.data is None:
-            return image
+            return placed(image, out)
         pixel_format = self.pixel_format
         view = pixel_format.view(self.data, self.width, self.height, self.bytesperline)
-        image = pixel_format.convert(view, output)
+        image = pixel_format.convert(view, output, out)
         if pixel_format.compressed:
             self.decoded = True
             self.corrupt = image is None

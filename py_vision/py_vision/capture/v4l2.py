@@ -163,6 +163,14 @@ class V4L2Device:
     def __init__(self, path: str, capture_only: bool = True):
         self.path = path
         self._kinds = {}   # control id -> kind, as controls() last found them
+        # (id, minimum, maximum, kind) -> a menu's entries: a control's menu is the driver's
+        # own table, asked for once while the device is open (controls() runs twice a second).
+        self._menus = {}
+        # What the last walk of the controls found, and a request that reads all their values
+        # in one ioctl: while those values stay the same, so do the controls' ranges and flags
+        # (an automatic mode makes others inactive by its value).
+        self._known: Optional[List[ControlInfo]] = None
+        self._values_request = None
         try:
             self.fd = os.open(path, os.O_RDWR | os.O_NONBLOCK)
         except OSError as error:
@@ -282,7 +290,46 @@ class V4L2Device:
     # --- controls -------------------------------------------------------------------
 
     def controls(self) -> List[ControlInfo]:
-        """Return every control, of every type, with its value where one number holds it."""
+        """
+        Return every control, of every type, with its value where one number holds it.
+
+        Every control is asked for again (VIDIOC_QUERY_EXT_CTRL, VIDIOC_G_CTRL each) only when
+        a value changed since the last call: the values themselves are read in one ioctl.
+        """
+        known = self._known
+        if known is not None:
+            values = self._read_values()
+            if values is not None and values == self._known_values:
+                return list(known)
+        found = self._walk()
+        self._known = found
+        self._values_request = None
+        self._known_values = self._read_values()
+        return list(found)
+
+    def _read_values(self) -> Optional[List[int]]:
+        """Return the values of the controls last walked, read in one ioctl; None if not."""
+        request = self._values_request
+        if request is None:
+            readable = [control for control in self._known if control.value is not None]
+            items = (_ExtControl * len(readable))()
+            for item, control in zip(items, readable):
+                item.id = control.cid
+            kinds = [control.kind for control in readable]
+            request = self._values_request = (_ExtControls(count=len(readable), controls=items),
+                                              items, kinds)
+        controls, items, kinds = request
+        if not kinds:
+            return []
+        try:
+            self._ioctl(VIDIOC_G_EXT_CTRLS, controls)
+        except OSError:
+            return None   # a driver that will not read them together: walked every time
+        return [item.u.value64 if kind == INT64 else item.u.value & 0xFFFFFFFF
+                if kind == BITMASK else item.u.value for item, kind in zip(items, kinds)]
+
+    def _walk(self) -> List[ControlInfo]:
+        """Ask the device for every control, its range, flags, menu and value."""
         try:
             queried = list(self._walk_ext())
         except OSError:
@@ -294,7 +341,12 @@ class V4L2Device:
             if kind == BITMASK:   # the old ioctl's 32 bits are signed
                 high, default = high & 0xFFFFFFFF, default & 0xFFFFFFFF
             self._kinds[cid] = kind
-            menu = tuple(self._menu(cid, low, high, kind)) if kind in (MENU, INT_MENU) else ()
+            menu = ()
+            if kind in (MENU, INT_MENU):
+                key = (cid, low, high, kind)
+                menu = self._menus.get(key)
+                if menu is None:
+                    menu = self._menus[key] = tuple(self._menu(cid, low, high, kind))
             value = None
             if kind in SETTABLE and kind != BUTTON and not flags & CTRL_FLAG_WRITE_ONLY:
                 value = self.get_control(cid)

@@ -16,19 +16,22 @@
 The pixel format table and the V4L2 structures py_vision streams with.
 
 The names a user types find their format; layouts with padded rows read the same picture as
-unpadded ones; the streaming structures have the sizes and ioctl numbers of
-linux/videodev2.h on 64-bit machines. (docs/transport.md's table is checked against this one
-by the repository's tests/test_docs_match_code.py: the package alone has no docs/.)
+unpadded ones; a frame converts into a message's bytes as into an array of its own, and a JPEG
+that does not decode is no picture whatever the output; the streaming structures have the
+sizes and ioctl numbers of linux/videodev2.h on 64-bit machines. (docs/transport.md's table
+is checked against this one by the repository's tests/test_docs_match_code.py: the package
+alone has no docs/.)
 """
 
 import re
 import struct
 
+import cv2
 import numpy as np
 from py_vision.capture import v4l2_stream
 from py_vision.capture.devices import CAMERA, classify, FILE, SYNTHETIC
-from py_vision.capture.pixel_formats import find, FORMATS, fourcc_code, fourcc_text
-from py_vision.capture.source import SourceError
+from py_vision.capture.pixel_formats import find, FORMATS, fourcc_code, fourcc_text, OUTPUTS
+from py_vision.capture.source import Frame, SourceError
 from py_vision.capture.synthetic_picture import synthetic_yuyv
 from py_vision.control_names import pixel_format_fourcc
 import pytest
@@ -77,6 +80,52 @@ def test_padded_rows_give_the_same_picture(pixel_format):
     plain = pixel_format.convert(pixel_format.view(sent, width, height), 'bgr8')
     spaced = pixel_format.convert(pixel_format.view(padded, width, height, stride), 'bgr8')
     assert np.array_equal(plain, spaced)
+
+
+def sent_frame(pixel_format, width=64, height=48, index=2):
+    """Return a frame's bytes (1-D uint8) as a camera of pixel_format sends them."""
+    if pixel_format.compressed:
+        picture = cv2.cvtColor(synthetic_yuyv(index, width, height), cv2.COLOR_YUV2BGR_YUYV)
+        return cv2.imencode('.jpg', picture)[1].reshape(-1)
+    sent = np.ascontiguousarray(pixel_format.from_yuyv(synthetic_yuyv(index, width, height)))
+    return sent.reshape(-1).view(np.uint8)
+
+
+UNDECODABLE_JPEG = np.frombuffer(b'\xff\xd8' + bytes(200) + b'\xff\xd9', np.uint8)
+CONVERTED = [pixel_format for pixel_format in FORMATS.values() if pixel_format.conversions]
+
+
+@pytest.mark.parametrize('output', OUTPUTS)
+@pytest.mark.parametrize('pixel_format', CONVERTED, ids=lambda pixel_format: pixel_format.fourcc)
+def test_a_frame_converts_into_a_message_as_into_an_array_of_its_own(pixel_format, output):
+    width, height = 64, 48
+    view = pixel_format.view(sent_frame(pixel_format, width, height), width, height)
+    own = pixel_format.convert(view, output)
+    out = np.full_like(own, 77)
+    written = pixel_format.convert(view, output, out)
+    assert written is out, 'the image is written where the message wants it'
+    assert np.array_equal(out, own)
+    # An array of another size (a JPEG larger than announced) is not written into: the image
+    # comes back in one of its own.
+    small = np.full((own.shape[0] // 2,) + own.shape[1:], 77, own.dtype)
+    other = pixel_format.convert(view, output, small)
+    assert other is not small and np.array_equal(other, own) and (small == 77).all()
+
+
+@pytest.mark.parametrize('output', OUTPUTS)
+def test_a_whole_jpeg_that_does_not_decode_is_no_picture_in_any_output(output):
+    # SOI, nothing a decoder can read, EOI: whole as far as the camera layer can tell, so it
+    # reaches the decoder, which gives up. Every output says "no picture" (the frame is counted
+    # as corrupt); none raises, which would end the capture thread and the node.
+    frame = Frame(1, None, FORMATS['MJPG'], 64, 48, UNDECODABLE_JPEG)
+    assert frame.image(output) is None and frame.corrupt
+
+
+@pytest.mark.parametrize('output', OUTPUTS)
+def test_a_jpeg_that_does_not_decode_writes_nothing_into_a_message(output):
+    frame = Frame(2, None, FORMATS['MJPG'], 64, 48, UNDECODABLE_JPEG)
+    out = np.full((48, 64, 3), 77, np.uint8)
+    assert frame.image(output, out) is None and frame.corrupt and (out == 77).all()
 
 
 def test_the_streaming_structures_are_videodev2s_on_64_bit():

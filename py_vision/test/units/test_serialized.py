@@ -1,0 +1,264 @@
+# Copyright 2026 py_vision contributors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Messages kept serialized (py_vision.serialized) and published as they are.
+
+rclpy is the oracle, of this run's ROS (Humble's rclpy 3.3.2 or Jazzy's): the bytes
+SerializedImage writes deserialize (rclpy.serialization.deserialize_message) to the Image
+rclpy would have sent, and are as long as rclpy's own serialization of it, for every encoding
+name the bridge knows and odd sizes, frame_ids and steps (which move the fields' alignment and
+padding); a CameraInfo's bytes follow its stamp and frame_id. Published through rcl
+(SerializedPublisher), and by ImagePublisher frame after frame, with and without a conversion
+written into the message, they reach a subscriber as the Image the bridge makes of the pixels.
+"""
+
+import time
+from types import SimpleNamespace
+
+from hypothesis import given, HealthCheck, settings, strategies as st
+import numpy as np
+from py_vision.capture.pixel_formats import FORMATS
+from py_vision.capture.source import Frame
+from py_vision.cv_bridge import CvBridge
+from py_vision.params import Parameters
+from py_vision.serialized import SerializedImage, SerializedStamped
+from py_vision.serialized_publisher import SerializedPublisher
+from py_vision.transport import ImagePublisher
+import pytest
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message, serialize_message
+import ros_harness
+from sensor_msgs.msg import CameraInfo, Image
+from std_msgs.msg import Header
+
+SETTINGS = settings(max_examples=200, deadline=None,
+                    suppress_health_check=[HealthCheck.function_scoped_fixture])
+# Every encoding sensor_msgs/image_encodings names (and the bridge reads), of every length.
+ENCODINGS = (
+    ['rgb8', 'rgba8', 'rgb16', 'rgba16', 'bgr8', 'bgra8', 'bgr16', 'bgra16', 'mono8', 'mono16',
+     'yuv422', 'yuv422_yuy2', 'uyvy', 'yuyv', 'nv21', 'nv24', '']
+    + ['bayer_%s%d' % (pattern, bits) for pattern in ('rggb', 'bggr', 'gbrg', 'grbg')
+       for bits in (8, 16)]
+    + ['%s%s' % (depth, suffix) for depth in ('8UC', '8SC', '16UC', '16SC', '32SC', '32FC',
+                                              '64FC') for suffix in ('1', '2', '3', '4', '')])
+RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+
+
+def header(frame_id='camera', sec=1700000000, nanosec=123456789):
+    msg = Header(frame_id=frame_id)
+    msg.stamp.sec, msg.stamp.nanosec = sec, nanosec
+    return msg
+
+
+def reference(head, height, width, encoding, step, is_bigendian, data):
+    return Image(header=head, height=height, width=width, encoding=encoding,
+                 is_bigendian=is_bigendian, step=step, data=bytes(data))
+
+
+def written(serialized, head, height, width, encoding, step, is_bigendian, data):
+    serialized.prepare(head, height, width, encoding, step, is_bigendian, len(data))
+    serialized.data()[:] = np.frombuffer(data, np.uint8)
+    return serialized.message().tobytes()
+
+
+@SETTINGS
+@given(encoding=st.sampled_from(ENCODINGS),
+       frame_id=st.text(st.characters(blacklist_categories=('Cs',), blacklist_characters='\0'),
+                        max_size=9),
+       height=st.integers(0, 5), width=st.integers(0, 7), pixel_bytes=st.integers(1, 8),
+       padding=st.integers(0, 5), is_bigendian=st.booleans(),
+       sec=st.integers(-2 ** 31, 2 ** 31 - 1), nanosec=st.integers(0, 2 ** 32 - 1))
+def test_an_image_deserializes_to_what_rclpy_sends(
+        encoding, frame_id, height, width, pixel_bytes, padding, is_bigendian, sec, nanosec):
+    step = width * pixel_bytes + padding
+    data = bytes(np.random.default_rng(height * 7 + width).integers(
+        0, 256, step * height, np.uint8))
+    head = header(frame_id, sec, nanosec)
+    ours = written(SerializedImage(), head, height, width, encoding, step, is_bigendian, data)
+    expected = reference(head, height, width, encoding, step, is_bigendian, data)
+    assert deserialize_message(ours, Image) == expected
+    assert len(ours) == len(serialize_message(expected))
+
+
+def test_every_encoding_at_odd_sizes_in_one_buffer_as_the_layout_changes():
+    serialized = SerializedImage()
+    rng = np.random.default_rng(5)
+    for index, encoding in enumerate(ENCODINGS):
+        for width, height, frame_id in ((1, 1, ''), (3, 5, 'a'), (7, 2, 'ab'), (5, 3, 'abc'),
+                                        (641, 3, 'camera_é')):
+            step = width * (1 + index % 4) + index % 3
+            data = rng.integers(0, 256, step * height, np.uint8).tobytes()
+            head = header(frame_id, index, width)
+            ours = written(serialized, head, height, width, encoding, step, index % 2, data)
+            expected = reference(head, height, width, encoding, step, index % 2, data)
+            assert deserialize_message(ours, Image) == expected, (encoding, width, frame_id)
+            assert len(ours) == len(serialize_message(expected))
+
+
+def test_a_message_of_the_same_layout_changes_its_stamp_and_pixels_only():
+    serialized = SerializedImage()
+    first = written(serialized, header(sec=1), 2, 3, 'rgb8', 9, False, bytes(range(18)))
+    before = serialized.message()
+    second = written(serialized, header(sec=2, nanosec=5), 2, 3, 'rgb8', 9, False,
+                     bytes(range(18, 36)))
+    assert serialized.message().ctypes.data == before.ctypes.data, 'the same bytes, reused'
+    assert deserialize_message(second, Image) == reference(
+        header(sec=2, nanosec=5), 2, 3, 'rgb8', 9, False, bytes(range(18, 36)))
+    changed = [i for i, (a, b) in enumerate(zip(first, second)) if a != b]
+    data_at = len(second) - 18
+    assert all(4 <= i < 12 or i >= data_at for i in changed), changed
+
+
+def test_the_pixels_start_on_a_cache_line_whatever_the_frame_id():
+    serialized = SerializedImage()
+    for frame_id in ('', 'a', 'ab', 'abc', 'abcd', 'camera_optical_frame'):
+        serialized.prepare(header(frame_id), 480, 640, 'bgr8', 1920)
+        assert serialized.data().ctypes.data % 64 == 0
+        assert serialized.data().size == 480 * 1920
+
+
+def test_a_stamp_or_size_out_of_range_is_refused():
+    # Humble's messages refuse such a stamp themselves; Jazzy's take it unless told to check.
+    for sec, nanosec in ((2 ** 31, 0), (0, -1), (0, 2 ** 32)):
+        stamp = SimpleNamespace(sec=sec, nanosec=nanosec)
+        with pytest.raises(ValueError):
+            SerializedImage().prepare(SimpleNamespace(frame_id='', stamp=stamp), 1, 1, 'mono8',
+                                      1)
+    with pytest.raises(ValueError):
+        SerializedImage().prepare(header(), 2 ** 32, 1, 'mono8', 1)
+
+
+def test_a_camera_info_follows_its_stamp_frame_id_and_replacement():
+    info = CameraInfo(header=header('cam'), width=640, height=480, distortion_model='plumb_bob',
+                      d=[0.1, -0.2, 0.0, 0.001, 0.3], k=[500.0, 0, 320, 0, 500, 240, 0, 0, 1],
+                      binning_x=2)
+    serialized = SerializedStamped()
+    for sec, frame_id in ((1, 'cam'), (2, 'cam'), (3, 'a_longer_frame_id'), (4, '')):
+        info.header = header(frame_id, sec, sec * 10)
+        ours = serialized.message(info).tobytes()
+        assert deserialize_message(ours, CameraInfo) == info
+        assert len(ours) == len(serialize_message(info))
+    replaced = CameraInfo(header=header('', 5), width=320, height=240)
+    assert deserialize_message(serialized.message(replaced).tobytes(), CameraInfo) == replaced
+
+
+@pytest.fixture(scope='module')
+def node():
+    """Give the tests a node of their own on a ROS domain of their own."""
+    domain = ros_harness.DomainId()
+    context = Context()
+    rclpy.init(args=[], context=context, domain_id=domain.value)
+    made = rclpy.create_node('serialized_tests', context=context, enable_rosout=False)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(made)
+    made.test_executor = executor
+    yield made
+    executor.shutdown()
+    made.destroy_node()
+    rclpy.shutdown(context=context)
+    domain.release()
+
+
+def receive(node, topic, count, publish):
+    """Publish with publish(index) until count messages of topic came back; return them."""
+    got = []
+    subscription = node.create_subscription(Image, topic, got.append, RELIABLE)
+    try:
+        # Published once the subscription is matched, each message then waited for.
+        ros_harness.wait_until(lambda: node.count_subscribers(topic) > 0, 10,
+                               what='the subscription matched')
+        for index in range(count):
+            publish(index)
+            deadline = time.monotonic() + 10
+            while len(got) <= index and time.monotonic() < deadline:
+                node.test_executor.spin_once(timeout_sec=0.05)
+            assert len(got) == index + 1, 'message %d did not come' % index
+    finally:
+        node.destroy_subscription(subscription)
+    return got
+
+
+def test_a_serialized_message_goes_out_through_rcl_as_it_is(node):
+    publisher = node.create_publisher(Image, 'serialized_image', RELIABLE)
+    sender = SerializedPublisher(publisher)
+    assert sender.available, "this rclpy's publishers give their rcl publisher"
+    serialized, sent = SerializedImage(), []
+
+    def publish(index):
+        data = bytes((index + i) % 256 for i in range(3 * 5 * 2))
+        written(serialized, header('cam', index), 3, 5, 'yuv422_yuy2', 10, False, data)
+        sent.append(reference(header('cam', index), 3, 5, 'yuv422_yuy2', 10, False, data))
+        sender.publish(serialized.message())
+    assert receive(node, 'serialized_image', 3, publish) == sent
+    node.destroy_publisher(publisher)
+    with pytest.raises(Exception):   # rclpy's InvalidHandle: no message sent on a dead handle
+        sender.publish(serialized.message())
+
+
+def frame_of(fourcc, width, height, index):
+    """Return a Frame of the synthetic picture as a camera of that format sends it."""
+    from py_vision.capture.synthetic_picture import synthetic_yuyv
+    pixel_format = FORMATS[fourcc]
+    data = np.ascontiguousarray(pixel_format.from_yuyv(synthetic_yuyv(index, width, height)))
+    return Frame(index, None, pixel_format, width, height, data.reshape(-1).view(np.uint8))
+
+
+@pytest.mark.parametrize('fourcc,output', [
+    ('YUYV', 'bgr8'), ('YUYV', 'native'), ('YUYV', 'mono16'), ('NV21', 'native'),
+    ('Y16', 'native'), ('GREY', 'rgb8'), ('BA81', 'native')])
+def test_image_publisher_sends_what_the_bridge_makes_of_the_frames(node, fourcc, output):
+    """Frames of one size, then another, then the first again, then a new frame_id."""
+    topic = 'frames_%s_%s' % (fourcc.lower(), output)
+    images = ImagePublisher(Parameters(node), topic, RELIABLE, CvBridge())
+    bridge, sent, written_in_place = CvBridge(), [], []
+    sizes = [(64, 48), (64, 48), (32, 16), (64, 48), (64, 48)]
+
+    def publish(index):
+        width, height = sizes[index]
+        frame = frame_of(fourcc, width, height, index)
+        head = header('cam' if index < 4 else 'camera_frame', index)
+        encoding = frame.encoding(output)
+        expected = bridge.cv2_to_imgmsg(frame.image(output).copy(), encoding)
+        expected.header = head
+        sent.append(expected)
+        fresh = frame_of(fourcc, width, height, index)  # nothing converted yet
+
+        def into(out):
+            image = fresh.image(output, out)
+            written_in_place.append(image is out)
+            return image
+        assert images.publish(head, lambda: fresh.image(output), None, encoding, None,
+                              into) == (True, False)
+    assert receive(node, topic, len(sizes), publish) == sent
+    # Converted into the message when the frame has the last one's size (a new frame_id moves
+    # the pixels, not their shape); into an array of its own, then copied, when not.
+    assert written_in_place == [True, False, False, True]
+
+
+def test_image_publisher_copies_pixels_it_cannot_convert_into(node):
+    """vision_step's way: image() alone, the pixels copied into the message once."""
+    images = ImagePublisher(Parameters(node), 'drawn', RELIABLE, CvBridge())
+    sent = []
+
+    def publish(index):
+        pixels = np.full((12, 10, 3), index * 40, np.uint8)
+        expected = CvBridge().cv2_to_imgmsg(pixels, 'bgr8')
+        expected.header = header('step', index)
+        sent.append(expected)
+        assert images.publish(header('step', index), lambda: pixels) == (True, False)
+    assert receive(node, 'drawn', 3, publish) == sent
