@@ -46,6 +46,7 @@ import re
 import shutil
 import subprocess
 import sys
+import zipfile
 
 import pytest
 
@@ -334,7 +335,7 @@ def test_the_runtime_recipe_gives_bitbake_what_it_intends(bb):
 
 
 @pytest.fixture(scope='module')
-def fetched(build):
+def fetched(build, tmp_path_factory):
     """
     Fetch the wheel afresh (cleanall first), unpack it, run the licence checks: what came out.
 
@@ -364,7 +365,13 @@ def fetched(build):
             'licences': sorted(p.name for p in licences.glob('generic_*')),
             'fft2d licence': (licences / 'generic_Ooura-fft2d').is_file() and (
                 licences / 'generic_Ooura-fft2d').read_text(),
+            'wheel': None,
+            'install': build.yocto / 'layers' / 'openembedded-core' / 'meta' /
+            'classes-recipe' / 'python_pep517.bbclass',
         }
+        if (workdir / wheel).is_file():  # kept for the install test, as the fetcher gave it
+            seen['wheel'] = tmp_path_factory.mktemp('wheel') / wheel
+            shutil.copyfile(workdir / wheel, seen['wheel'])
     return seen
 
 
@@ -381,6 +388,53 @@ def test_bitbake_fetches_the_wheel_checks_its_sha256_and_unpacks_it(fetched):
     assert fetched['unpacked']
     assert fetched['readme2d.txt'] == (
         LAYER_SOURCE / RECIPE.parent / 'files' / 'readme2d.txt').read_bytes()
+
+
+def test_the_image_gets_the_wheels_files_as_the_readme_says(fetched, tmp_path):
+    # langdale's python_pep517 installs the wheel with pypa/installer 0.5.1 (its
+    # python3-installer), with the options its do_install gives; OE's one patch to installer
+    # (--interpreter) writes scripts' first lines, and this wheel has no script.
+    assert fetched['wheel'] is not None, 'the fetch test failed: no wheel to install'
+    line = next(line for line in fetched['install'].read_text().splitlines()
+                if '-m installer' in line)
+    level = re.search(r'^INSTALL_WHEEL_COMPILE_BYTECODE \?= "(.*)"$',
+                      fetched['install'].read_text(), re.M).group(1)
+    assert '${INSTALL_WHEEL_COMPILE_BYTECODE}' in line and '--destdir=${D}' in line, line
+    import installer
+    assert installer.__version__ == '0.5.1'
+    with zipfile.ZipFile(fetched['wheel']) as wheel:
+        inside = {name: wheel.read(name) for name in wheel.namelist()}
+    assert not [name for name in inside if '.data/scripts/' in name or
+                name.endswith('entry_points.txt')]
+    destdir = tmp_path / 'image'
+    run = subprocess.run([sys.executable, '-m', 'installer', level, '--destdir=%s' % destdir,
+                          str(fetched['wheel'])], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stdout + run.stderr
+    site = next(destdir.rglob('site-packages'))
+    installed = sorted(str(path.relative_to(site)) for path in site.rglob('*') if path.is_file())
+    tag = 'cpython-%d%d' % sys.version_info[:2]
+    modules = ['__init__', 'interpreter', 'metrics_interface', 'metrics_portable']
+    info = 'tflite_runtime-2.14.0.dist-info/'
+    assert installed == sorted(
+        ['tflite_runtime/%s.py' % name for name in modules]
+        + ['tflite_runtime/__pycache__/%s.%s.pyc' % (name, tag) for name in modules]
+        + ['tflite_runtime/_pywrap_tensorflow_interpreter_wrapper.so']
+        + [info + name for name in ('METADATA', 'WHEEL', 'top_level.txt', 'RECORD')])
+    # The modules, the extension module and the metadata: byte for byte the wheel's.
+    for name in installed:
+        if not name.endswith(('.pyc', 'RECORD')):
+            assert (site / name).read_bytes() == inside[name], name
+    # RECORD rewritten: every file but the .pyc, its sha256 in hexadecimal, as `ls` sees them.
+    record = {}
+    for row in (site / info / 'RECORD').read_text().splitlines():
+        path, digest, size = row.rsplit(',', 2)
+        record[path] = digest
+    assert sorted(record) == sorted(name for name in installed if not name.endswith('.pyc'))
+    for path, digest in record.items():
+        if path.endswith('RECORD'):
+            assert digest == ''
+        else:
+            assert digest == 'sha256=' + hashlib.sha256((site / path).read_bytes()).hexdigest()
 
 
 def test_oe_licence_checks_pass_the_runtime_recipe(fetched):
