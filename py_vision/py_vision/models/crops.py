@@ -19,8 +19,11 @@ A model's input cut from a camera frame, and the way back to the frame's pixels.
 `letterbox` fits the whole frame into a model's square input, keeping its aspect ratio and
 padding the rest with black (MediaPipe's detectors: keep_aspect_ratio, BORDER_ZERO);
 `rotated_crop` cuts a rotated square out of the frame (the hand landmark model's input: the
-hand turned upright). Both convert BGR to RGB, scale the values to the model's range, and
-return the affine matrix that maps the input's pixels back to the frame's.
+hand turned upright). Both sample the frame bilinearly, as MediaPipe's CPU conversion of an
+image to a tensor does (one interpolation from the frame to the model's input, no averaging
+of the pixels between samples), convert BGR to RGB, scale the values to the model's range in
+one pass into the float32 tensor, and return the affine matrix that maps the input's pixels
+back to the frame's.
 """
 
 from dataclasses import dataclass
@@ -45,10 +48,16 @@ class Crop:
         return points @ self.to_image[:, :2].T + self.to_image[:, 2]
 
 
-def _tensor(rgb: np.ndarray, value_range: Tuple[float, float]) -> np.ndarray:
+def _tensor(bgr: np.ndarray, value_range: Tuple[float, float]) -> np.ndarray:
+    """Return the (1, height, width, 3) float32 RGB tensor of a bgr8 input, in value_range."""
     low, high = value_range
-    scaled = rgb.astype(np.float32) * np.float32((high - low) / 255.0) + np.float32(low)
-    return scaled[None]
+    tensor = np.empty((1,) + bgr.shape, np.float32)
+    # x * scale + low in float32, element by element: the same values as converting first.
+    np.multiply(cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB), np.float32((high - low) / 255.0),
+                out=tensor[0], dtype=np.float32)
+    if low:
+        tensor += np.float32(low)
+    return tensor
 
 
 def _check(image: np.ndarray) -> None:
@@ -67,10 +76,15 @@ def letterbox(image_bgr: np.ndarray, width: int, height: int,
     fitted_w = max(1, int(round(columns * scale)))
     fitted_h = max(1, int(round(rows * scale)))
     left, top = (width - fitted_w) // 2, (height - fitted_h) // 2
-    resized = cv2.resize(image_bgr, (fitted_w, fitted_h), interpolation=cv2.INTER_AREA)
-    padded = cv2.copyMakeBorder(resized, top, height - fitted_h - top, left,
-                                width - fitted_w - left, cv2.BORDER_CONSTANT, value=0)
-    tensor = _tensor(cv2.cvtColor(padded, cv2.COLOR_BGR2RGB), value_range)
+    padded = np.zeros((height, width, 3), np.uint8)
+    fitted = padded[top:top + fitted_h, left:left + fitted_w]
+    # Straight into the black square: OpenCV writes into the view it is given (where it
+    # would not, the copy does).
+    resized = cv2.resize(image_bgr, (fitted_w, fitted_h), dst=fitted,
+                         interpolation=cv2.INTER_LINEAR)
+    if resized is not fitted:
+        fitted[...] = resized
+    tensor = _tensor(padded, value_range)
     sx, sy = columns / fitted_w, rows / fitted_h
     to_image = np.array([[sx, 0, -left * sx], [0, sy, -top * sy]], np.float64)
     return Crop(tensor, to_image)
@@ -94,4 +108,4 @@ def rotated_crop(image_bgr: np.ndarray, center: Tuple[float, float], side: float
     crop = cv2.warpAffine(image_bgr, to_image, (size, size),
                           flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                           borderMode=cv2.BORDER_REPLICATE)
-    return Crop(_tensor(cv2.cvtColor(crop, cv2.COLOR_BGR2RGB), value_range), to_image)
+    return Crop(_tensor(crop, value_range), to_image)
