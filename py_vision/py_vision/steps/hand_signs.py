@@ -19,8 +19,9 @@ Read as four steps: detect a hand and its 21 landmarks (MediaPipe's palm detecto
 landmark model, py_vision.models.hands), classify the landmarks into one of a handful of signs
 (py_vision.models.signs: not a sign language, a few gestures), act (the sign's motion as a
 geometry_msgs/Twist, or TwistStamped with the frame's header, and the sign as std_msgs/String
-on `hand_sign`), and draw the landmarks and the sign on the image. The commands go through a
-CommandGate (steps/commands.py), which makes them fail safe: a sign moves the robot once held
+on `hand_sign`), and draw the landmarks and the sign on the image (while it is published or
+shown: StepContext.output_wanted). The commands go through a CommandGate (steps/commands.py),
+which makes them fail safe: a sign moves the robot once held
 `hold_frames` frames, a change of sign stops it first; no hand (or one scoring below
 `min_score`) and `open_hand` stop it at once; a frame older than `max_frame_age` stops it;
 and one zero command goes out when no frame was processed for `command_timeout` seconds (a
@@ -87,7 +88,9 @@ def motion(sign: str, linear_speed: float, angular_speed: float) -> Twist:
 def draw(image: np.ndarray, hand: Optional[Hand], sign: str) -> None:
     """Draw the hand's bones and joints and the sign on image, in place."""
     if hand is not None:
-        points = [tuple(int(round(v)) for v in point[:2]) for point in hand.landmarks]
+        # Rounded half to even, as round() does.
+        pixels = np.rint(np.asarray(hand.landmarks)[:, :2]).astype(int)
+        points = [tuple(point) for point in pixels.tolist()]
         for a, b in BONES:
             cv2.line(image, points[a], points[b], BONE_BGR, 2, cv2.LINE_AA)
         for point in points:
@@ -132,6 +135,7 @@ class HandSigns(Step):
         self.signs = self.twists = None
         self.gate: Optional[CommandGate] = None
         self._frame_age: Callable[[], Optional[float]] = lambda: None
+        self._output_wanted: Callable[[], bool] = lambda: True
         self._now: Callable[[], Any] = lambda: None
         self._stops: Optional[ThrottledLog] = None  # the gate's own zeros, logged
 
@@ -149,6 +153,7 @@ class HandSigns(Step):
         self.twists = context.create_publisher(TwistStamped if stamped else Twist,
                                                self.settings['cmd_vel_topic'])
         self._frame_age = context.frame_age
+        self._output_wanted = context.output_wanted
         self._now = context.node.get_clock().now
         self._stops = ThrottledLog(context.logger, STOP_LOG_PERIOD_S) if context.logger else None
         timeout = self.settings['command_timeout']
@@ -182,7 +187,8 @@ class HandSigns(Step):
         self.gate.frame(sign, motion(sign, self.settings['linear_speed'],
                                      self.settings['angular_speed']),
                         header, self._frame_age())
-        draw(image, best, sign)
+        if self._output_wanted():  # nobody watching: no drawing
+            draw(image, best, sign)
         return image
 
     def frame_failed(self, header: Any, error: Exception) -> None:

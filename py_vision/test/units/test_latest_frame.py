@@ -99,7 +99,9 @@ def test_statistics_give_counts_and_percentiles_of_the_recent_window(closing):
     empty = worker.snapshot()
     assert empty == {'frames_in': 0, 'processed': 0, 'skipped': 0,
                      'processing_ms_p50': None, 'processing_ms_p99': None,
-                     'age_ms_p50': None, 'age_ms_p99': None}
+                     'age_ms_p50': None, 'age_ms_p99': None,
+                     'part_ms_p50': None, 'part_ms_p99': None,
+                     'rest_ms_p50': None, 'rest_ms_p99': None, 'part_items': 0}
     for count, duration in enumerate(durations, start=1):
         worker.offer(duration)
         wait_until(lambda: worker.processed == count, TIMEOUT, interval=0.001,
@@ -117,6 +119,40 @@ def test_statistics_give_counts_and_percentiles_of_the_recent_window(closing):
     later = worker.snapshot()
     assert later['processing_ms_p50'] is None and later['age_ms_p99'] is None
     assert later['processed'] == 100
+    # Without a part clock nothing is split.
+    assert snap['part_ms_p50'] is None and snap['rest_ms_p50'] is None
+    assert snap['part_items'] == 0
+
+
+def test_a_part_clock_splits_each_items_time_into_that_part_and_the_rest(closing):
+    clock, part = FakeClock(), FakeClock(0.0)  # part: the seconds inside models, say
+
+    def step(inside_s):
+        clock.t += 0.003  # 3 ms of the step's own work, every item
+        clock.t += inside_s
+        part.t += inside_s
+        if inside_s > 0.085:
+            raise ValueError('a step that fails after its model ran')
+    worker = LatestFrameWorker(step, window_s=100.0, clock=clock, part_clock=part,
+                               on_error=lambda error: None)
+    closing(worker)
+    # 90 items with 1 .. 90 ms inside the part, 10 with none (a frame no model ran on).
+    parts = [ms / 1e3 for ms in range(1, 91)] + [0.0] * 10
+    for count, inside in enumerate(parts, start=1):
+        worker.offer(inside)
+        wait_until(lambda: worker.processed == count, TIMEOUT, interval=0.001,
+                   what='step %d' % count)
+    snap = worker.snapshot()
+    # Sorted, the parts are 10 zeros then 1 .. 90 ms: the 50th is 40 ms, the 99th 89 ms.
+    assert snap['part_ms_p50'] == pytest.approx(40.0)
+    assert snap['part_ms_p99'] == pytest.approx(89.0)
+    assert snap['rest_ms_p50'] == pytest.approx(3.0) and snap['rest_ms_p99'] == pytest.approx(3.0)
+    assert snap['processing_ms_p50'] == pytest.approx(43.0)
+    assert snap['part_items'] == 90
+    clock.t += 100.1
+    later = worker.snapshot()
+    assert later['part_ms_p50'] is None and later['rest_ms_p99'] is None
+    assert later['part_items'] == 0
 
 
 def test_a_step_that_raises_is_reported_and_the_worker_goes_on():
