@@ -35,7 +35,7 @@ import math
 from typing import List, Sequence, Tuple
 
 import numpy as np
-from py_vision.models.crops import letterbox
+from py_vision.models.crops import InputBuffers, letterbox
 from py_vision.models.runtime import find_outputs, Model
 
 __all__ = ['AnchorOptions', 'decode', 'DecodeOptions', 'Detections', 'iou', 'SsdDetector',
@@ -231,6 +231,7 @@ class SsdDetector:
         self.nms_threshold = nms_threshold
         self.limit = limit
         self._anchors = ssd_anchors(AnchorOptions(spec.size, spec.size, spec.strides))
+        self._buffers = InputBuffers()  # the model's input, made in the same arrays each frame
         size = spec.size
         self._decoding = DecodeOptions(spec.num_keypoints, size, size, size, size, min_score)
 
@@ -248,7 +249,7 @@ class SsdDetector:
         """Return the frame's detections, best first: (box, score, keypoints) in frame pixels."""
         size = self.spec.size
         decoding = self._decoding
-        crop = letterbox(image_bgr, size, size, self.spec.value_range)
+        crop = letterbox(image_bgr, size, size, self.spec.value_range, self._buffers)
         results = self.model.run(crop.tensor)
         regressors, scores = (results[index] for index in self._outputs)
         found = weighted_nms(decode(regressors, scores, self._anchors, decoding),

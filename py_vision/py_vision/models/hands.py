@@ -42,7 +42,7 @@ import math
 from typing import List, Optional
 
 import numpy as np
-from py_vision.models.crops import rotated_crop
+from py_vision.models.crops import InputBuffers, rotated_crop
 from py_vision.models.files import shipped_model
 from py_vision.models.palm import enlarge, hand_region, HandRegion, MODEL_FILE as PALM_FILE
 from py_vision.models.palm import PalmDetector, upright_rotation
@@ -145,6 +145,7 @@ class HandTracker:
         self.mirrored = mirrored
         self.track = track
         self._tracked: List[HandRegion] = []
+        self._buffers = InputBuffers()  # the landmark model's input, made in the same arrays
 
     @property
     def min_palm_score(self) -> float:
@@ -193,7 +194,7 @@ class HandTracker:
     def _landmarks(self, image_bgr: np.ndarray, region: HandRegion) -> Optional[Hand]:
         """Return the hand in the region, or None when the model sees none there."""
         crop = rotated_crop(image_bgr, (region.x, region.y), region.side, region.rotation,
-                            _SIZE, (0.0, 1.0))
+                            _SIZE, (0.0, 1.0), self._buffers)
         results = self.landmark_model.run(crop.tensor)
         points, presence, left = (results[index] for index in self._outputs)
         score = float(presence.reshape(-1)[0])
