@@ -36,7 +36,11 @@ step's image is not published), `threads` 1:
 Each node's CPU time (utime + stime from /proc, all its threads) over --window seconds is
 divided by the frames it processed in that time (vision_step's /diagnostics count; the bare
 subscriber's own record). Where the node's /diagnostics splits its processing time into the
-models' and the rest, that is recorded too (p50 of its last 5 s).
+models' and the rest, that is recorded too (p50 of its last 5 s), and so is the split of its
+CPU over the same window (its 'processing CPU ms' and 'models CPU ms', since start): the
+worker thread's CPU a frame, of it the models' (in the node), the step's own work (the worker's
+CPU less the models'), and the rest of the node (its CPU less the worker's: receiving the frame,
+the executor, DDS).
 
 The models alone, in this process, between the node runs (nothing else of the benchmark's
 running): the same runtime as the node's (the first .tflite runtime installed: LiteRT in .venv,
@@ -72,6 +76,8 @@ PROCESSING = 'vision_step: processing'
 # What the node's /diagnostics says of its processing time, where it says it (p50, ms).
 SPLIT_KEYS = {'processing p50 ms': 'processing_ms_p50', 'models p50 ms': 'models_ms_p50',
               'rest p50 ms': 'rest_ms_p50'}
+# Its worker thread's CPU since start, in processing and of it in models (ms).
+CPU_KEYS = {'processing CPU ms': 'worker_cpu_ms', 'models CPU ms': 'models_in_node_cpu_ms'}
 
 
 def interpreter_module():
@@ -230,6 +236,12 @@ def measure_node(case, size, fps, window, env, clip):
     for key, name in SPLIT_KEYS.items():
         if after.get(key) not in (None, '', 'None', 'none'):
             result[name] = float(after[key])
+    for key, name in CPU_KEYS.items():
+        if key in after and key in before:
+            result[name] = (int(after[key]) - int(before[key])) / frames
+    if 'worker_cpu_ms' in result:
+        result['own_in_node_ms'] = result['worker_cpu_ms'] - result['models_in_node_cpu_ms']
+        result['node_rest_ms'] = result['cpu_ms_per_frame'] - result['worker_cpu_ms']
     if case != 'circle':
         result['no_hand_frames'] = sum(1 for sign in window_signs if sign.data == 'no_hand')
     return result
@@ -253,7 +265,9 @@ def summarise(runs, cases, sizes):
                    'cpu_ms_per_frame': median('cpu_ms_per_frame'),
                    'frames': median('frames')}
             for key in ('model_cpu_ms', 'ratio', 'no_hand_frames', 'processing_ms_p50',
-                        'models_ms_p50', 'rest_ms_p50'):
+                        'models_ms_p50', 'rest_ms_p50', 'worker_cpu_ms',
+                        'models_in_node_cpu_ms', 'own_in_node_ms', 'node_rest_ms',
+                        'ratio_in_node'):
                 if median(key) is not None:
                     row[key] = median(key)
             if case in ('bare', 'circle'):
@@ -274,6 +288,24 @@ def print_table(rows, runtime, load):
           '(no models) | own work beyond circle and model | bare subscriber | node: '
           'processing / models / rest p50 |' % runtime)
     print('|---|---|---:|---:|---:|---:|---:|---:|---:|')
+    print_rows(rows)
+    if any(row.get('worker_cpu_ms') for row in rows):
+        print('\nThe same frames, the node\'s CPU split by its own accounting (ms a frame):')
+        print('\n| size | case | node | worker thread | of it models | of it the step\'s own '
+              'work | rest of the node (receiving, executor, DDS) | node / its models |')
+        print('|---|---|---:|---:|---:|---:|---:|---:|')
+        for row in rows:
+            if row.get('worker_cpu_ms') is None:
+                continue
+            print('| %s | %s | %.2f | %.2f | %.2f | %.2f | %.2f | %s |' % (
+                row['size'], row['case'], row['cpu_ms_per_frame'], row['worker_cpu_ms'],
+                row['models_in_node_cpu_ms'], row['own_in_node_ms'], row['node_rest_ms'],
+                '%.2f' % row['ratio_in_node'] if row.get('ratio_in_node') else '-'))
+    print('\nmachine load average (1 min) during the run: %.1f to %.1f on %d CPUs' % (
+        min(load), max(load), os.cpu_count()))
+
+
+def print_rows(rows):
     for size in sorted({row['size'] for row in rows}, key=lambda s: int(s.split('x')[0])):
         of_size = {row['case']: row for row in rows if row['size'] == size}
         for case, row in of_size.items():
@@ -289,8 +321,6 @@ def print_table(rows, runtime, load):
                 '%.2f' % row['ratio'] if row.get('ratio') else '-',
                 ms(of_size.get('circle', {}).get('cpu_ms_per_frame')), ms(row.get('own_ms')),
                 ms(of_size.get('bare', {}).get('cpu_ms_per_frame')), split))
-    print('\nmachine load average (1 min) during the run: %.1f to %.1f on %d CPUs' % (
-        min(load), max(load), os.cpu_count()))
 
 
 def main():
@@ -333,6 +363,10 @@ def main():
                     if (size, case) in models:
                         result['model_cpu_ms'] = models[size, case].cpu_ms(options.invokes)
                         result['ratio'] = result['cpu_ms_per_frame'] / result['model_cpu_ms']
+                    if result.get('models_in_node_cpu_ms'):
+                        # Against the models' CPU in the node, measured in the same window.
+                        result['ratio_in_node'] = (result['cpu_ms_per_frame']
+                                                   / result['models_in_node_cpu_ms'])
                     load.append(os.getloadavg()[0])
                     result.update(round=round_index + 1, size='%dx%d' % size, case=case,
                                   load_average=load[-1])

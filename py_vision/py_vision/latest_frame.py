@@ -25,9 +25,11 @@ Each item's arrival (the clock when it was offered) goes with it: `frame_age()`,
 the step, says how long ago the item it works on arrived, measured on this host whatever the
 item's own stamps say.
 
-With a `part_clock` (the seconds the worker's thread has spent so far in one part of the work:
-vision_step gives it the time inside models, py_vision.models.model_time), each item's time
-is split into that part and the rest, and both have their percentiles too.
+The worker also adds up the CPU time its thread spent in the steps (`cpu_ms`, since start).
+With a `part_clock` (the wall and CPU seconds the worker's thread has spent so far in one part
+of the work: vision_step gives it the time inside models, py_vision.models.model_time), each
+item's time is split into that part and the rest, both with their percentiles, and the part's
+CPU time is added up too.
 
 No ROS here: the node supplies the step and reports how old each of its outputs is.
 """
@@ -90,7 +92,8 @@ class LatestFrameWorker(Generic[T]):
     waiting or in progress. Over the last window_s seconds: how long a step took and how old
     the outputs were (`record_age()`), p50 and p99; with a part_clock, how much of each step's
     time was in that part and how much was the rest, p50 and p99, and how many of those steps
-    spent any time in the part.
+    spent any time in the part. The CPU time of the steps (`cpu_ms`) and of their part
+    (`part_cpu_ms`): since start, whole milliseconds.
 
     A step that raises is reported through on_error (default: a traceback on stderr) and
     the worker goes on with the next item.
@@ -100,9 +103,12 @@ class LatestFrameWorker(Generic[T]):
                  on_error: Callable[[Exception], None] = print_error,
                  window_s: float = 5.0, name: str = 'latest_frame',
                  clock: Callable[[], float] = time.monotonic,
-                 part_clock: Optional[Callable[[], float]] = None):
+                 part_clock: Optional[Callable[[], Tuple[float, float]]] = None,
+                 cpu_clock: Callable[[], float] = time.thread_time):
         self._process = process
         self._part_clock = part_clock
+        self._cpu_clock = cpu_clock
+        self._cpu_s = self._part_cpu_s = 0.0  # since start
         self._on_error = on_error
         self._clock = clock
         self._cond = threading.Condition()
@@ -170,6 +176,8 @@ class LatestFrameWorker(Generic[T]):
                 'rest_ms_p50': rest[0],
                 'rest_ms_p99': rest[1],
                 'part_items': self._part_s.count(lambda seconds: seconds > 0),
+                'cpu_ms': int(round(self._cpu_s * 1e3)),
+                'part_cpu_ms': int(round(self._part_cpu_s * 1e3)),
             }
 
     def close(self, timeout: float = 1.0) -> bool:
@@ -200,8 +208,8 @@ class LatestFrameWorker(Generic[T]):
                     return
                 item, self._waiting = self._waiting, _EMPTY
                 self._arrived = self._waiting_since
-            part = self._part_clock() if self._part_clock is not None else 0.0
-            start = self._clock()
+            part = self._part_clock() if self._part_clock is not None else (0.0, 0.0)
+            start, cpu = self._clock(), self._cpu_clock()
             try:
                 self._process(item)
             except Exception as error:
@@ -210,13 +218,16 @@ class LatestFrameWorker(Generic[T]):
                     self._on_error(error)
             finally:
                 self._arrived = None
-            took = self._clock() - start
+            took, cpu = self._clock() - start, self._cpu_clock() - cpu
             if self._part_clock is not None:
-                part = min(took, self._part_clock() - part)
+                wall, part_cpu = self._part_clock()
+                part = (min(took, wall - part[0]), part_cpu - part[1])
             del item  # a frame is large: do not hold it while waiting for the next one
             with self._cond:
                 self.processed += 1
                 self._processing_s.add(took)
+                self._cpu_s += cpu
                 if self._part_clock is not None:
-                    self._part_s.add(part)
-                    self._rest_s.add(took - part)
+                    self._part_s.add(part[0])
+                    self._rest_s.add(took - part[0])
+                    self._part_cpu_s += part[1]

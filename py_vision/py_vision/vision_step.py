@@ -34,7 +34,7 @@ running the `circle` step under its own name and topic.
 
 The statistics line (every STATS_PERIOD_S) and /diagnostics give a frame's processing time,
 split into the time inside the step's models (their runtimes time each run on the worker's
-thread: steps.api.models_seconds) and the rest: converting, the step's own work, publishing.
+thread: steps.api.models_clock) and the rest: converting, the step's own work, publishing.
 
 At stop (close()), in this order: what the step publishes through its context from the worker
 thread is dropped from then on (StepPublishers); the worker is given STOP_GRACE_S to finish
@@ -62,7 +62,7 @@ from py_vision.params import Parameters, Spec, viewer_specs
 from py_vision.qos import publisher_qos
 from py_vision.stats import stamp_age_s, StreamStats
 from py_vision.steps import loader
-from py_vision.steps.api import DELIVERY_TIMEOUT_S, models_seconds, ProcessesFrames
+from py_vision.steps.api import DELIVERY_TIMEOUT_S, models_clock, ProcessesFrames
 from py_vision.steps.api import step_parameters, StepContext, STOP_GRACE_S
 from py_vision.throttled_log import ThrottledLog
 from py_vision.transport import ImagePublisher, MAX_IMAGE, subscribe, TRANSPORTS
@@ -141,7 +141,9 @@ class ProcessingStats:
 
         The processing times split into the models' (time inside their runs, as the runtimes
         measure it) and the rest, each frame's: models_ms_p50/p99, rest_ms_p50/p99, and
-        frames_with_models, how many frames of the window ran a model at all.
+        frames_with_models, how many frames of the window ran a model at all. Since start, the
+        worker thread's CPU time in processing (processing_cpu_ms) and of it in models
+        (models_cpu_ms).
         """
         with self._lock:
             output = self._output.snapshot()
@@ -150,7 +152,9 @@ class ProcessingStats:
         worker = self.worker.snapshot()
         split = {'models_ms_p50': worker.pop('part_ms_p50'),
                  'models_ms_p99': worker.pop('part_ms_p99'),
-                 'frames_with_models': worker.pop('part_items')}
+                 'frames_with_models': worker.pop('part_items'),
+                 'processing_cpu_ms': worker.pop('cpu_ms'),
+                 'models_cpu_ms': worker.pop('part_cpu_ms')}
         return dict(output, **worker, **split)
 
 
@@ -305,7 +309,7 @@ class VisionStep(Node):
         # held up, DDS keeps only the newest frame for it; the slot holds one frame.
         self.worker = LatestFrameWorker(self.process, on_error=self._worker_failed,
                                         window_s=STATS_PERIOD_S, name='processing',
-                                        part_clock=models_seconds)
+                                        part_clock=models_clock)
         self.stats = ProcessingStats(self.worker)
         self._failures = ThrottledLog(self.get_logger(), ERROR_LOG_PERIOD_S)
         self._last_failure = ''
@@ -474,6 +478,8 @@ class VisionStep(Node):
                   'models p50 ms': s['models_ms_p50'], 'models p99 ms': s['models_ms_p99'],
                   'rest p50 ms': s['rest_ms_p50'], 'rest p99 ms': s['rest_ms_p99'],
                   'frames running models': s['frames_with_models'],
+                  'processing CPU ms': s['processing_cpu_ms'],
+                  'models CPU ms': s['models_cpu_ms'],
                   'output age p50 ms': s['age_ms_p50'], 'output age p99 ms': s['age_ms_p99'],
                   'output rate': float(s['fps'])}
         simulated = getattr(self.step, 'simulated_work_s', None)

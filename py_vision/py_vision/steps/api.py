@@ -43,7 +43,7 @@ timers (StepContext.create_timer) run on the executor's. A process() that raises
 and counted, frame_failed() is called, and the next frame is tried.
 
 Time inside models: the runtimes of py_vision.models time each model run on the thread that
-runs it (py_vision.models.model_time); `models_seconds()` is that thread's total, which
+runs it (py_vision.models.model_time); `models_clock()` is that thread's total, which
 vision_step reads around each frame to split its processing time into the models' and the
 rest. A step running a model some other way counts it with `model_time.timing()`.
 """
@@ -55,7 +55,7 @@ import numpy as np
 from py_vision.models.model_time import thread_model_time
 from py_vision.params import Spec
 
-__all__ = ['DELIVERY_TIMEOUT_S', 'models_seconds', 'ProcessesFrames', 'Step', 'StepContext',
+__all__ = ['DELIVERY_TIMEOUT_S', 'models_clock', 'ProcessesFrames', 'Step', 'StepContext',
            'STOP_GRACE_S']
 
 
@@ -73,9 +73,10 @@ def shipped_model_path(name: str) -> str:
     return shipped_model(name)
 
 
-def models_seconds() -> float:
-    """Return the seconds the calling thread has spent inside models so far (wall time)."""
-    return thread_model_time().seconds
+def models_clock() -> Tuple[float, float]:
+    """Return the seconds the calling thread has spent inside models so far: (wall, CPU)."""
+    total = thread_model_time()
+    return total.seconds, total.cpu_seconds
 
 
 # How long the node waits at stop for process() to return before it abandons it, and then for

@@ -136,6 +136,8 @@ def test_hand_signs_splits_its_processing_time_into_the_models_and_the_rest(laun
     assert 0 <= rest <= processing, values
     assert float(values['models p99 ms']) <= float(values['processing p99 ms']), values
     assert int(values['frames running models']) >= 1, values
+    # Since start, the worker's CPU time in processing, and of it in models.
+    assert 0 < int(values['models CPU ms']) <= int(values['processing CPU ms']), values
     line = wait_until(sent_and(lambda: SPLIT_LINE.search(node.output())), 30.0, interval=0.5,
                       what='the statistics line with the split:\n%s' % node.output())
     assert 0 < float(line.group(2)) <= float(line.group(1)), line.group(0)

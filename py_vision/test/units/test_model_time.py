@@ -35,25 +35,28 @@ MODULES = {'litert': 'ai_edge_litert', 'tflite_runtime': 'tflite_runtime',
            'onnxruntime': 'onnxruntime', 'opencv': 'cv2'}
 
 
-def test_timing_adds_the_blocks_time_and_one_run_to_the_thread():
-    clock = FakeClock(50.0)
+def test_timing_adds_the_blocks_time_its_cpu_time_and_one_run_to_the_thread():
+    clock, cpu = FakeClock(50.0), FakeClock(3.0)
     before = thread_model_time()
-    with timing(clock):
+    with timing(clock, cpu):
         clock.t += 0.25
-    with timing(clock):
+        cpu.t += 0.125  # the rest of the time the thread waited for a core
+    with timing(clock, cpu):
         clock.t += 0.5
+        cpu.t += 0.5
     clock.t += 7.0  # outside any block: not a model's time
-    assert thread_model_time().since(before) == ModelTime(0.75, 2)
+    cpu.t += 7.0
+    assert thread_model_time().since(before) == ModelTime(0.75, 2, 0.625)
 
 
 def test_a_run_that_raises_is_counted_too():
     clock = FakeClock()
     before = thread_model_time()
     with pytest.raises(RuntimeError):
-        with timing(clock):
+        with timing(clock, clock):
             clock.t += 0.125
             raise RuntimeError('the model failed')
-    assert thread_model_time().since(before) == ModelTime(0.125, 1)
+    assert thread_model_time().since(before) == ModelTime(0.125, 1, 0.125)
 
 
 def test_another_threads_runs_are_not_this_threads():
@@ -63,14 +66,14 @@ def test_another_threads_runs_are_not_this_threads():
 
     def elsewhere():
         start = thread_model_time()
-        with timing(clock):
+        with timing(clock, clock):
             clock.t += 2.0
         other.append(thread_model_time().since(start))
     thread = threading.Thread(target=elsewhere)
     thread.start()
     thread.join(10.0)
-    assert other == [ModelTime(2.0, 1)]
-    assert thread_model_time().since(before) == ModelTime(0.0, 0)
+    assert other == [ModelTime(2.0, 1, 2.0)]
+    assert thread_model_time().since(before) == ModelTime(0.0, 0, 0.0)
 
 
 def timed_run(model, array):
@@ -89,6 +92,7 @@ def test_a_tflite_models_run_counts_once_and_no_more_than_it_took(runtime):
     took, inside = timed_run(model, np.zeros((1, 192, 192, 3), np.float32))
     assert inside.runs == 1
     assert 0 < inside.seconds <= took
+    assert 0 < inside.cpu_seconds  # the run computes on this thread (1 thread)
 
 
 @pytest.mark.parametrize('runtime', ['opencv', 'onnxruntime'])
@@ -105,4 +109,4 @@ def test_a_run_refused_before_the_model_runs_is_not_a_model_run():
     before = thread_model_time()
     with pytest.raises(Exception, match='wants shape'):
         model.run(np.zeros((1, 100, 100, 3), np.float32))
-    assert thread_model_time().since(before) == ModelTime(0.0, 0)
+    assert thread_model_time().since(before) == ModelTime(0.0, 0, 0.0)
