@@ -290,8 +290,8 @@ def print_table(rows, runtime, load):
     print('|---|---|---:|---:|---:|---:|---:|---:|---:|')
     print_rows(rows)
     if any(row.get('worker_cpu_ms') for row in rows):
-        print('\nThe same frames, the node\'s CPU split by its own accounting (ms a frame):')
-        print('\n| size | case | node | worker thread | of it models | of it the step\'s own '
+        print("\nThe same frames, the node's CPU split by its own accounting (ms a frame):")
+        print("\n| size | case | node | worker thread | of it models | of it the step's own "
               'work | rest of the node (receiving, executor, DDS) | node / its models |')
         print('|---|---|---:|---:|---:|---:|---:|---:|')
         for row in rows:
