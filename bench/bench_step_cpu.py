@@ -47,9 +47,12 @@ running): the same runtime as the node's (the first .tflite runtime installed: L
 tflite_runtime in the board-version environment) and the same threads, an interpreter of the
 model file made directly with the runtime's own API (not py_vision's), its input set once to
 the tensor the step feeds it for that case (the letterboxed synthetic frame; the crop around
-the hand of the clip's first frame), then invoked --invokes times: the thread's CPU time a
-call. The ratio of a round is the node's CPU a processed frame over that; medians over
---rounds rounds, the cases interleaved. Prints a Markdown table and writes
+the hand of the clip's first frame), then invoked --invokes times back to back: the thread's
+CPU time a call. The ratio of a round is the node's CPU a processed frame over that; medians
+over --rounds rounds, the cases interleaved. A model run once a frame period finds less of
+itself in the caches than one run back to back (the machine's other work runs between): the
+same model is also timed invoked at the camera's rate (--paced calls, one every frame period),
+and the node's CPU given against that too. Prints a Markdown table and writes
 bench/results/step_cpu-py<version>.json.
 """
 
@@ -106,14 +109,23 @@ class ModelAlone:
         index = self.interpreter.get_input_details()[0]['index']
         self.interpreter.set_tensor(index, tensor)
 
-    def cpu_ms(self, invokes):
-        """Return the calling thread's CPU a call, over invokes calls (after a few unmeasured)."""
+    def cpu_ms(self, invokes, period_s=0.0):
+        """
+        Return the calling thread's CPU a call, over invokes calls (after a few unmeasured).
+
+        With a period_s, one call every period_s seconds (as a step at the camera's rate).
+        """
         for _ in range(3):
             self.interpreter.invoke()
-        start = time.thread_time()
+        cpu, due = 0.0, time.monotonic()
         for _ in range(invokes):
+            if period_s:
+                due += period_s
+                time.sleep(max(0.0, due - time.monotonic()))
+            start = time.thread_time()
             self.interpreter.invoke()
-        return (time.thread_time() - start) / invokes * 1e3
+            cpu += time.thread_time() - start
+        return cpu / invokes * 1e3
 
 
 def model_inputs(size, clip):
@@ -264,7 +276,8 @@ def summarise(runs, cases, sizes):
             row = {'size': label, 'case': case, 'rounds': len(taken),
                    'cpu_ms_per_frame': median('cpu_ms_per_frame'),
                    'frames': median('frames')}
-            for key in ('model_cpu_ms', 'ratio', 'no_hand_frames', 'processing_ms_p50',
+            for key in ('model_cpu_ms', 'ratio', 'paced_model_cpu_ms', 'ratio_paced',
+                        'no_hand_frames', 'processing_ms_p50',
                         'models_ms_p50', 'rest_ms_p50', 'worker_cpu_ms',
                         'models_in_node_cpu_ms', 'own_in_node_ms', 'node_rest_ms',
                         'ratio_in_node'):
@@ -284,10 +297,10 @@ def summarise(runs, cases, sizes):
 
 
 def print_table(rows, runtime, load):
-    print('\n| size | case | CPU a processed frame | model alone (%s) | ratio | circle '
-          '(no models) | own work beyond circle and model | bare subscriber | node: '
-          'processing / models / rest p50 |' % runtime)
-    print('|---|---|---:|---:|---:|---:|---:|---:|---:|')
+    print('\n| size | case | CPU a processed frame | model alone (%s) | ratio | model alone '
+          "at the camera's rate | ratio | circle (no models) | own work beyond circle and "
+          'model | bare subscriber | node: processing / models / rest p50 |' % runtime)
+    print('|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|')
     print_rows(rows)
     if any(row.get('worker_cpu_ms') for row in rows):
         print("\nThe same frames, the node's CPU split by its own accounting (ms a frame):")
@@ -316,9 +329,11 @@ def print_rows(rows):
                 return '-' if value is None else '%.2f ms' % value
             split = '/'.join('-' if row.get(key) is None else '%.1f' % row[key] for key in (
                 'processing_ms_p50', 'models_ms_p50', 'rest_ms_p50'))
-            print('| %s | %s | %s | %s | %s | %s | %s | %s | %s ms |' % (
+            print('| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s ms |' % (
                 size, case, ms(row['cpu_ms_per_frame']), ms(row.get('model_cpu_ms')),
                 '%.2f' % row['ratio'] if row.get('ratio') else '-',
+                ms(row.get('paced_model_cpu_ms')),
+                '%.2f' % row['ratio_paced'] if row.get('ratio_paced') else '-',
                 ms(of_size.get('circle', {}).get('cpu_ms_per_frame')), ms(row.get('own_ms')),
                 ms(of_size.get('bare', {}).get('cpu_ms_per_frame')), split))
 
@@ -330,7 +345,9 @@ def main():
     parser.add_argument('--window', type=float, default=20.0, help='seconds measured a case')
     parser.add_argument('--rounds', type=int, default=3, help='rounds (medians over them)')
     parser.add_argument('--invokes', type=int, default=100,
-                        help='calls of a model alone, each time it is measured')
+                        help='calls of a model alone, back to back, each time it is measured')
+    parser.add_argument('--paced', type=int, default=30,
+                        help="calls of a model alone at the camera's rate, each time")
     parser.add_argument('--cases', default=','.join(CASES), help='cases, comma-separated')
     parser.add_argument('--hand-photo', default='', help='photograph of a hand for the clip')
     options = parser.parse_args()
@@ -361,8 +378,13 @@ def main():
                         result = measure_node(case, size, options.fps, options.window, env,
                                               clips.get(size))
                     if (size, case) in models:
-                        result['model_cpu_ms'] = models[size, case].cpu_ms(options.invokes)
+                        alone = models[size, case]
+                        result['model_cpu_ms'] = alone.cpu_ms(options.invokes)
                         result['ratio'] = result['cpu_ms_per_frame'] / result['model_cpu_ms']
+                        result['paced_model_cpu_ms'] = alone.cpu_ms(options.paced,
+                                                                    1.0 / options.fps)
+                        result['ratio_paced'] = (result['cpu_ms_per_frame']
+                                                 / result['paced_model_cpu_ms'])
                     if result.get('models_in_node_cpu_ms'):
                         # Against the models' CPU in the node, measured in the same window.
                         result['ratio_in_node'] = (result['cpu_ms_per_frame']

@@ -141,6 +141,9 @@ def decode(regressors: np.ndarray, raw_scores: np.ndarray, anchors: np.ndarray,
     logits = np.clip(raw_scores.reshape(-1), -options.score_clipping, options.score_clipping)
     scores = 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
     keep = np.flatnonzero(scores >= options.min_score)
+    count = options.num_keypoints
+    if not len(keep):  # the usual frame: no anchor scores enough, nothing to decode
+        return _no_detections(count)
     raw = regressors[keep].astype(np.float64)
     anchor = anchors[keep].astype(np.float64)
     scale = np.array([options.x_scale, options.y_scale])
@@ -148,11 +151,15 @@ def decode(regressors: np.ndarray, raw_scores: np.ndarray, anchors: np.ndarray,
     centers = raw[:, 0:2] / scale * size + anchor[:, 0:2]
     half = raw[:, 2:4] / np.array([options.w_scale, options.h_scale]) * size / 2
     boxes = np.concatenate([centers - half, centers + half], axis=1)
-    count = options.num_keypoints
     points = raw[:, 4:4 + 2 * count].reshape(len(keep), count, 2)
     keypoints = points / scale * size[:, None, :] + anchor[:, None, 0:2]
     return Detections(boxes.astype(np.float32), keypoints.astype(np.float32),
                       scores[keep].astype(np.float32))
+
+
+def _no_detections(num_keypoints: int) -> Detections:
+    return Detections(np.empty((0, 4), np.float32), np.empty((0, num_keypoints, 2), np.float32),
+                      np.empty(0, np.float32))
 
 
 def iou(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
@@ -175,6 +182,8 @@ def weighted_nms(detections: Detections, threshold: float = 0.3,
     group becomes one detection with the score-weighted mean box and keypoints and the best
     one's score. Returns at most `limit` detections (0: all), best first.
     """
+    if not len(detections):
+        return _no_detections(detections.keypoints.shape[1])
     order = np.argsort(-detections.scores, kind='stable')
     boxes, keypoints, scores = [], [], []
     while len(order) and (not limit or len(scores) < limit):
