@@ -15,10 +15,13 @@
 """
 The reference publisher: bare rclpy, prebuilt bgr8 frames, a paced loop, nothing else.
 
-Usage: bare_image_publisher.py OUT.json WIDTH HEIGHT FPS RELIABILITY
+Usage: bare_image_publisher.py OUT.json WIDTH HEIGHT FPS RELIABILITY [--py-vision-profile]
+    [--ros-args ...]
 Publishes sensor_msgs/Image on usb_camera/image; header.frame_id carries the frame index and
 header.stamp the publish time. On SIGINT/SIGTERM it writes the (monotonic time, index) of
-every frame it published to OUT.json.
+every frame it published to OUT.json. With --py-vision-profile it runs on the Fast DDS profile
+usbcam_publisher gives itself for frames of that size (py_vision.dds: shared memory for three
+of them); without, on what the environment says.
 """
 
 import sys
@@ -48,11 +51,23 @@ def build_messages(width, height):
     return messages
 
 
+def use_camera_profile(width, height):
+    """Point Fast DDS at the profile usbcam_publisher makes for frames of this size."""
+    from py_vision import dds
+    size = ['--ros-args', '-p', 'image_width:=%d' % width, '-p', 'image_height:=%d' % height]
+    dds.use_packaged_profile(dds.OWN_SIZE, [sys.argv[0]] + size, 'usbcam_publisher',
+                             image_topics=())
+
+
 def main():
     out, width, height, fps, reliability = sys.argv[1:6]
     width, height, fps = int(width), int(height), float(fps)
+    args = sys.argv[6:]
+    if args[:1] == ['--py-vision-profile']:
+        args = args[1:]
+        use_camera_profile(width, height)
     # The process stops itself on SIGINT/SIGTERM (after writing its results), not rclpy.
-    rclpy.init(args=sys.argv[6:], signal_handler_options=SignalHandlerOptions.NO)
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     stop = StopFlag()
     node = rclpy.create_node('bare_image_publisher')
     qos = image_qos(reliability)

@@ -15,11 +15,14 @@
 """
 The reference subscriber: bare rclpy, records every frame it receives.
 
-Usage: bare_image_subscriber.py OUT.json RELIABILITY
+Usage: bare_image_subscriber.py OUT.json RELIABILITY [--py-vision-profile] [--ros-args ...]
 Subscribes to usb_camera/image (sensor_msgs/Image) and records, per message, the monotonic
 arrival time, the frame index (header.frame_id when it is a number, as the reference publisher
 sends it, else decoded from the synthetic source's image) and the latency from header.stamp to
 the callback. Prints FIRST_FRAME_MARK at the first frame and writes OUT.json on SIGINT/SIGTERM.
+With --py-vision-profile it runs on the Fast DDS profile usbcam_subscriber gives itself
+(py_vision.dds, tailored the same way: the reference of bench_receive.py); without, on what
+the environment says.
 """
 
 import sys
@@ -58,10 +61,21 @@ class Recorder:
         self.events.append((arrival, self.frame_index(msg), (now_ns - stamp_ns) / 1e9))
 
 
+def use_subscriber_profile():
+    """Point Fast DDS at the profile usbcam_subscriber makes for itself (before rclpy.init)."""
+    from py_vision import dds, transport
+    dds.use_packaged_profile(dds.NO_IMAGES, [], 'usbcam_subscriber',
+                             image_topics=transport.image_topics('/usb_camera/image'))
+
+
 def main():
     out, reliability = sys.argv[1:3]
+    args = sys.argv[3:]
+    if args[:1] == ['--py-vision-profile']:
+        args = args[1:]
+        use_subscriber_profile()
     # The process stops itself on SIGINT/SIGTERM (after writing its results), not rclpy.
-    rclpy.init(args=sys.argv[3:], signal_handler_options=SignalHandlerOptions.NO)
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     stop = StopFlag()
     node = rclpy.create_node('bare_image_subscriber')
     qos = image_qos(reliability)

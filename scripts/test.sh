@@ -122,6 +122,38 @@ install_compiler() {
 }
 install_compiler
 
+# petalinux/test checks the image's recipes with the tools a build uses: the Fast DDS patches
+# applied to Fast DDS' own files with GNU patch, and the shared-memory recovery compiled from
+# them with g++ and Debian's Boost headers (test_fast_dds_patches.py); and bitbake 2.2 from
+# ../shared/yocto on the recipes enable_ros.py places (test_bitbake.py), which needs the host
+# tools its HOSTTOOLS check asks for (chrpath, diffstat, gawk and cpio are not in a minimal
+# Debian), zstd to unpack the layers, and the en_US.UTF-8 locale, generated here where it is
+# missing (as root, with Debian's locales). Without them those tests are skipped with the
+# reason, and fail in CI.
+install_tool 'g++ libboost-dev patch' 'the Fast DDS patch tests (petalinux/test)'
+install_tool 'chrpath diffstat gawk cpio zstd' 'the bitbake tests (petalinux/test)'
+setup_bitbake_locale() {
+  local log=/tmp/py_vision-apt.log
+  locale -a 2>/dev/null | grep -qiE '^en_US\.utf-?8$' && return
+  if [ "$(id -u)" != 0 ]; then
+    echo '[test] no en_US.UTF-8 locale: the bitbake tests will be skipped (in CI: fail)' \
+      '(as root: enable en_US.UTF-8 in /etc/locale.gen, then locale-gen)'
+    return
+  fi
+  install_tool locales 'the en_US.UTF-8 locale of the bitbake tests' locale-gen
+  if ! command -v locale-gen >/dev/null 2>&1; then
+    return
+  fi
+  echo '[test] generating the en_US.UTF-8 locale for the bitbake tests'
+  touch /etc/locale.gen
+  grep -q '^en_US.UTF-8 UTF-8' /etc/locale.gen \
+    || sed -i 's/^# *en_US.UTF-8 UTF-8/en_US.UTF-8 UTF-8/' /etc/locale.gen
+  grep -q '^en_US.UTF-8 UTF-8' /etc/locale.gen || echo 'en_US.UTF-8 UTF-8' >>/etc/locale.gen
+  locale-gen >>$log 2>&1 \
+    || echo "[test] locale-gen failed (see $log): the bitbake tests will be skipped (in CI: fail)"
+}
+setup_bitbake_locale
+
 # The capture tests on the kernel's vivid driver (docs/vivid.md) boot a QEMU VM: QEMU, busybox,
 # kmod and Debian's kernel, set up by scripts/vivid_vm.sh (one line where it cannot; those tests
 # are then skipped, and fail in CI).

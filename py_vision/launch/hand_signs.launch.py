@@ -75,7 +75,7 @@ DISPLAY_VARIABLES = ('DISPLAY', 'WAYLAND_DISPLAY', 'QT_QPA_PLATFORM')
 STEP_ARGUMENTS = {
     'threads': (int, 'CPU threads of the hand and palm models; 1 keeps the step from waiting '
                      'on cores the camera and the viewer hold'),
-    'command_timeout': (float, 'seconds without a processed frame after which one zero command '
+    'command_timeout': (float, 'seconds without a processed frame after which a stop command '
                                'goes out (%s on an ARM board, whatever params_file says; '
                                'elsewhere empty: the value in params_file)' % BOARD_COMMAND_S),
     'max_frame_age': (float, 'seconds since a frame arrived after which it stops the robot '

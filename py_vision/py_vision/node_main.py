@@ -39,18 +39,16 @@ itself. Nothing shuts rclpy down behind the main thread's back.
 """
 
 import os
-from pathlib import Path
 import signal
 import sys
 import tempfile
 import threading
 import time
-import traceback
 from typing import Callable, ClassVar, Dict, List, Optional, Protocol, Sequence, Tuple, Type
 
 from py_vision import dds, ros_arguments, transport
+from py_vision.callback_failures import CallbackFailures
 from py_vision.params import ConfigError, help_text, Spec
-from py_vision.throttled_log import ThrottledLog
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.logging import get_logger
@@ -367,30 +365,6 @@ def _check_transport(node, image_topics: Tuple[str, ...]) -> None:
                 'frames on %s come through UDP, not shared memory: on Fast DDS 2.6 only the '
                 'topics read off the command line (%s) are (docs/boards.md, "A node nobody '
                 'hears")' % (subscription.topic_name, ', '.join(image_topics[:2])))
-
-
-class CallbackFailures:
-    """The exceptions callbacks raised: one error line per kind and minute, not the node's end."""
-
-    PERIOD_S = 60.0
-    # The executor's own frames, between spin_once() and the callback that raised.
-    _EXECUTOR_FILES = ('executors.py', 'task.py')
-
-    def __init__(self, logger):
-        self._log = ThrottledLog(logger, self.PERIOD_S)
-
-    def record(self, error: Exception) -> None:
-        """Log error (once per kind and period), naming the callback that raised it."""
-        frames = [frame for frame in traceback.extract_tb(error.__traceback__)
-                  if Path(frame.filename).name not in self._EXECUTOR_FILES and
-                  Path(frame.filename).name != Path(__file__).name]
-        where = ''
-        if frames:
-            path = Path(frames[0].filename)
-            where = ' in %s (%s/%s)' % (frames[0].name, path.parent.name, path.name)
-        kind = '%s%s' % (type(error).__name__, where)
-        self._log.error(kind, 'a callback failed%s: %s: %s; it was skipped and the node goes on'
-                        % (where, type(error).__name__, error))
 
 
 def _spin(executor, failures: CallbackFailures):

@@ -15,6 +15,7 @@
 """Received-stream statistics: rate, latency percentiles and gaps."""
 
 import collections
+import threading
 import time
 
 
@@ -51,11 +52,16 @@ def gap_worth_saying(snapshot):
 
 
 class StreamStats:
-    """Counts what a subscriber receives; `snapshot()` summarises the recent window."""
+    """
+    Counts what a subscriber receives; `snapshot()` summarises the recent window.
+
+    Safe to use from two threads: the one frames arrive on, the one that reports.
+    """
 
     def __init__(self, window_s=5.0, clock=time.monotonic):
         self.window_s = window_s
         self._clock = clock
+        self._lock = threading.Lock()
         self._recent = collections.deque()  # (arrival time, latency in s)
         self.frames = 0
         self.errors = 0
@@ -66,41 +72,42 @@ class StreamStats:
 
     def add(self, latency_s, width, height, encoding):
         """Record one frame: its latency (stamp to arrival; None: no stamp), size, encoding."""
-        now = self._clock()
-        if self._last_arrival is not None:
-            self.longest_gap_s = max(self.longest_gap_s, now - self._last_arrival)
-        self._last_arrival = now
-        self._recent.append((now, latency_s))
-        self.frames += 1
-        self.width, self.height, self.encoding = width, height, encoding
+        with self._lock:
+            now = self._clock()
+            if self._last_arrival is not None:
+                self.longest_gap_s = max(self.longest_gap_s, now - self._last_arrival)
+            self._last_arrival = now
+            self._recent.append((now, latency_s))
+            self.frames += 1
+            self.width, self.height, self.encoding = width, height, encoding
 
     def add_error(self):
-        """Record one message that could not be used."""
-        self.errors += 1
+        """Record one message that could not be used; return how many so far."""
+        with self._lock:
+            self.errors += 1
+            return self.errors
 
     def snapshot(self):
         """Return a JSON-able summary: totals, and rate and latency over the recent window."""
-        now = self._clock()
-        while self._recent and self._recent[0][0] < now - self.window_s:
-            self._recent.popleft()
-        latencies = sorted(latency for _, latency in self._recent if latency is not None)
+        with self._lock:
+            now = self._clock()
+            while self._recent and self._recent[0][0] < now - self.window_s:
+                self._recent.popleft()
+            recent = list(self._recent)
+            summary = {'frames': self.frames, 'recent_frames': len(recent),
+                       'errors': self.errors, 'longest_gap_s': round(self.longest_gap_s, 3),
+                       'width': self.width, 'height': self.height, 'encoding': self.encoding}
+        latencies = sorted(latency for _, latency in recent if latency is not None)
         fps = 0.0
-        if len(self._recent) > 1:
-            span = now - self._recent[0][0]
-            fps = (len(self._recent) - 1) / span if span > 0 else 0.0
-        return {
-            'frames': self.frames,
-            'recent_frames': len(self._recent),
-            'errors': self.errors,
-            'fps': round(fps, 2),
-            'latency_ms_p50': round(percentile(latencies, 0.5) * 1e3, 2) if latencies else None,
-            'latency_ms_p99': round(percentile(latencies, 0.99) * 1e3, 2) if latencies else None,
-            'longest_gap_s': round(self.longest_gap_s, 3),
-            'width': self.width,
-            'height': self.height,
-            'encoding': self.encoding,
-        }
+        if len(recent) > 1:
+            span = now - recent[0][0]
+            fps = (len(recent) - 1) / span if span > 0 else 0.0
+        return dict(
+            summary, fps=round(fps, 2),
+            latency_ms_p50=round(percentile(latencies, 0.5) * 1e3, 2) if latencies else None,
+            latency_ms_p99=round(percentile(latencies, 0.99) * 1e3, 2) if latencies else None)
 
     def reset_gap(self):
         """Start measuring the longest gap afresh (after it has been reported)."""
-        self.longest_gap_s = 0.0
+        with self._lock:
+            self.longest_gap_s = 0.0

@@ -36,6 +36,7 @@ from typing import Callable, Optional, Tuple
 import cv2
 import numpy as np
 from py_vision.cv_bridge import fill_message_data, share_message_data
+from py_vision.frame_memory import FrameStream
 from py_vision.params import Parameters, Spec
 from py_vision.qos import create_publisher, ImageSubscription
 from py_vision.throttled_log import ThrottledLog
@@ -194,17 +195,24 @@ def image_bytes(msg) -> int:
 
 
 class _SizeLimit:
-    """A subscription's callback that refuses images over max_bytes before anything else."""
+    """
+    A subscription's callback that refuses images over max_bytes before anything else.
+
+    The frames it lets through are counted by size (frame_memory.FrameStream): the process
+    keeps the memory of a stream's frames for the next ones.
+    """
 
     def __init__(self, node, callback, max_bytes: float):
         self._callback = callback
         self._max_bytes = max_bytes
         self._log = ThrottledLog(node.get_logger())
+        self._frames = FrameStream()
         self.subscription: Optional[ImageSubscription] = None
 
     def __call__(self, msg):
         size = image_bytes(msg)
         if size <= self._max_bytes:
+            self._frames.frame(size)
             self._callback(msg)
             return
         what = '%dx%d %s' % (msg.width, msg.height, msg.encoding) if isinstance(
@@ -223,10 +231,11 @@ def subscribe(node, base_topic: str, transport: str, callback, depth: int = 10,
     With a video transport (VIDEO_TRANSPORTS) it reads the camera's own access units:
     CompressedVideo on ``T/foxglove``, CompressedImage on ``T/h264`` or ``T/h265``; ValueError
     when foxglove is asked for and foxglove_msgs is not installed. The subscription hears
-    reliable and best-effort publishers alike (qos.ImageSubscription). An image over
-    max_image_mb (of pixels, or of compressed data) never reaches callback: it is one
-    rate-limited warning, and the subscription is made anew so that the memory the middleware
-    took for it is given back.
+    reliable and best-effort publishers alike (qos.ImageSubscription) and takes its frames on
+    a thread of its own, where callback runs (not the executor's); close() it before the node
+    is destroyed. An image over max_image_mb (of pixels, or of compressed data) never reaches
+    callback: it is one rate-limited warning, and the subscription is made anew so that the
+    memory the middleware took for it is given back.
     """
     limit = _SizeLimit(node, callback, max_image_mb * 1e6)
     if transport in VIDEO_TRANSPORTS:

@@ -64,7 +64,8 @@ class VideoSubscriber(Node):
         MAX_IMAGE,
     )
 
-    display = None  # what close() finds when start-up was interrupted before it was made
+    # What close() finds when start-up was interrupted before they were made.
+    display = subscription_ = None
     failed = False   # it never stops of an error of its own
 
     def __init__(self):
@@ -106,7 +107,7 @@ class VideoSubscriber(Node):
         return stamp_age_s(self.get_clock().now().nanoseconds, msg.header.stamp)
 
     def callback(self, msg):
-        """Show one sensor_msgs/Image."""
+        """Show one sensor_msgs/Image (on the subscription's receive thread)."""
         latency = self._latency(msg)
         try:
             image = self.bridge_.imgmsg_to_cv2(msg)
@@ -203,7 +204,9 @@ class VideoSubscriber(Node):
         return stream_status(s, recent['errors'], self.subscription_.topic_name)
 
     def close(self):
-        """Close the window or the browser viewer (releasing its port)."""
+        """Stop taking frames, close the window or the browser viewer (releasing its port)."""
+        if self.subscription_ is not None:
+            self.subscription_.close()
         if self.display is not None:
             self.display.close()
 

@@ -29,18 +29,22 @@ also shown, like the subscriber shows its own.
 
 The processing runs on a LatestFrameWorker, not in the subscription callback: a step slower
 than the camera works on the newest frame and counts the ones it skips, instead of working
-through a backlog of old frames. docs/processing.md explains it. cv_bridge_test is this node
-running the `circle` step under its own name and topic.
+through a backlog of old frames. docs/processing.md explains it. The frames are taken on the
+subscription's own thread (transport.subscribe), which offers them to the worker; the
+executor runs the rest. cv_bridge_test is this node running the `circle` step under its own
+name and topic.
 
 The statistics line (every STATS_PERIOD_S) and /diagnostics give a frame's processing time,
 split into the time inside the step's models (their runtimes time each run on the worker's
 thread: steps.api.models_clock) and the rest: converting, the step's own work, publishing.
 
-At stop (close()), in this order: what the step publishes through its context from the worker
-thread is dropped from then on (StepPublishers); the worker is given STOP_GRACE_S to finish
-the frame under way, then abandoned (the step is never called again); the step's close()
-publishes its last messages (hand_signs: a zero command); the node waits up to
-DELIVERY_TIMEOUT_S for reliable subscribers to acknowledge them; run() destroys the node.
+At stop (close()), in this order: no frame is taken any more; what the step publishes
+through its context from the worker thread is dropped from then on (StepPublishers); the
+step's stopping() stops what it drives at once (hand_signs: its zero command), without waiting
+for the frame under way; the worker is given STOP_GRACE_S to finish that frame, then abandoned
+(the step is never called again); the step's close() releases what it holds; the node waits
+up to DELIVERY_TIMEOUT_S for reliable subscribers to acknowledge the step's last messages;
+run() destroys the node.
 """
 
 import dataclasses
@@ -260,7 +264,7 @@ class VisionStep(Node):
     NODE_PARAMETERS: Tuple[Spec, ...] = INPUT_SPECS + STEP_SPECS
     PARAMETERS: Tuple[Spec, ...] = NODE_PARAMETERS
 
-    worker = display = None  # what close() finds when start-up was interrupted
+    worker = display = subscription_ = None  # what close() finds when start-up was interrupted
     step_publishers: Optional[StepPublishers] = None
     step: Optional[ProcessesFrames] = None
     failed = False           # it never stops of an error of its own
@@ -506,25 +510,21 @@ class VisionStep(Node):
 
     def close(self):
         """
-        Stop the worker (abandoning a step in progress), the step, the window or viewer.
+        Stop the step (at once), the worker (abandoning a step in progress), the window or viewer.
 
-        The step's close() has the last word on its publishers, and what it sends there is
-        waited for (the module's docstring says in which order).
+        The step's stopping() and close() have the last word on its publishers, and what they
+        send there is waited for (the module's docstring says in which order).
         """
+        if self.subscription_ is not None:
+            self.subscription_.close()  # no frame is offered any more
         if self.step_publishers is not None:
             self.step_publishers.stop()
+        self._step_hook('stopping', 'to stop')
         if self.worker is not None and not self.worker.close(STOP_GRACE_S):
             self.get_logger().warning(
                 'step %s still processing a frame %g s after the stop: abandoned, nothing it '
                 'publishes from now on goes out' % (self.step_name, STOP_GRACE_S))
-        if self.step is not None:
-            closing = getattr(self.step, 'close', None)
-            if closing is not None:
-                try:
-                    closing()
-                except Exception as error:  # noqa: B902 - the step's own code
-                    self.get_logger().error('step %s failed to close: %s: %s' % (
-                        self.step_name, type(error).__name__, error))
+        self._step_hook('close', 'to close')
         if self.step_publishers is not None and not self.step_publishers.deliver(
                 DELIVERY_TIMEOUT_S):
             self.get_logger().warning(
@@ -532,6 +532,17 @@ class VisionStep(Node):
                 'within %g s' % (self.step_name, DELIVERY_TIMEOUT_S))
         if self.display is not None:
             self.display.close()
+
+    def _step_hook(self, name: str, what: str) -> None:
+        """Call the step's stopping() or close() where it has one; its failure is one line."""
+        hook = getattr(self.step, name, None) if self.step is not None else None
+        if hook is None:
+            return
+        try:
+            hook()
+        except Exception as error:  # noqa: B902 - the step's own code
+            self.get_logger().error('step %s failed %s: %s: %s' % (
+                self.step_name, what, type(error).__name__, error))
 
 
 def marked(spec: Spec, step_name: str) -> Spec:

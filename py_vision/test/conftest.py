@@ -16,6 +16,7 @@
 
 import os
 import shutil
+import signal
 import tempfile
 
 from emulated_camera import CompilerMissing, EmulatedCamera
@@ -189,6 +190,20 @@ def launch(ros_env, request):
     yield start
     for proc in started:
         proc.kill()
+
+
+@pytest.fixture
+def started_in_the_background():
+    """
+    Run the test as scripts/test.sh runs when a script starts it in the background.
+
+    A non-interactive shell starts a command with `&` (a CI runner's or an init script) with
+    SIGINT and SIGQUIT ignored, which every process it starts inherits: this test's process
+    ignores both until the test ends. Processes started through ros_harness still get their
+    default action (ros_harness.with_stop_signals_default).
+    """
+    with ros_harness.signals_ignored(signal.SIGINT, signal.SIGQUIT):
+        yield
 
 
 @pytest.fixture

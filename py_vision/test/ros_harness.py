@@ -22,6 +22,7 @@ network namespaces (`TwoHosts`). The benchmarks (bench/) run on this harness too
 environment, domain reservations, processes and hosts.
 """
 
+import contextlib
 import fcntl
 import importlib.util
 import os
@@ -250,10 +251,75 @@ def end_process_group(proc, timeout=5.0):
             proc.wait()
 
 
+# What the tests stop a process with: Ctrl-C, `kill`, a closed terminal.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
+@contextlib.contextmanager
+def signals_ignored(*signals):
+    """
+    Ignore signals in this process for the block (main thread only), then restore them.
+
+    A process that a non-interactive shell starts with `&` (a CI runner's script, an init
+    script) starts so, with SIGINT and SIGQUIT ignored; `nohup` leaves SIGHUP ignored.
+    """
+    previous = {sig: signal.signal(sig, signal.SIG_IGN) for sig in signals}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            # None: set outside Python, which cannot put it back; the default is closest.
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+
+
+def _ignored_stop_signals():
+    return [sig for sig in STOP_SIGNALS if signal.getsignal(sig) is signal.SIG_IGN]
+
+
+def _signal_resetter():
+    """Return the `env` that resets signals to their default (GNU coreutils 8.31 on)."""
+    if not hasattr(_signal_resetter, 'cache'):
+        env = shutil.which('env')
+        usable = env is not None and subprocess.run(
+            [env, '--default-signal=INT', 'true'], capture_output=True).returncode == 0
+        _signal_resetter.cache = env if usable else None
+    if _signal_resetter.cache is None:
+        raise RuntimeError(
+            'the tests run with %s ignored (a script started them with `&`, or nohup did), '
+            "and this machine's env cannot reset it for the processes they start: that needs "
+            "GNU coreutils' env 8.31 or later (--default-signal)" % ', '.join(
+                signal.Signals(sig).name for sig in _ignored_stop_signals()))
+    return _signal_resetter.cache
+
+
+def with_stop_signals_default(cmd):
+    """
+    Return cmd so that it starts with the default action for every stop signal (STOP_SIGNALS).
+
+    A process inherits the signals its parent ignores, and a program may keep them so: Humble's
+    `ros2 launch` then ignores Ctrl-C for good (it reads SIGINT through Python's own handler,
+    which Python does not install where SIGINT was ignored at its start). When the tests
+    themselves were started with a stop signal ignored (scripts/test.sh started by a script in
+    the background), cmd is run through `env --default-signal`, which resets it and execs cmd:
+    the process id is cmd's. Otherwise cmd is returned as it is.
+    """
+    ignored = _ignored_stop_signals()
+    if not ignored:
+        return list(cmd)
+    names = ','.join(signal.Signals(sig).name[len('SIG'):] for sig in ignored)
+    return [_signal_resetter(), '--default-signal=' + names] + list(cmd)
+
+
 def _popen(cmd, env, log_fd, log_path):
-    """Start cmd in a session of its own, its output into log_fd."""
-    return subprocess.Popen(cmd, env=env, stdout=log_fd, stderr=subprocess.STDOUT,
-                            stdin=subprocess.DEVNULL, start_new_session=True)
+    """
+    Start cmd in a session of its own, its output into log_fd.
+
+    It gets the stop signals' default action whatever this process ignores, as a command typed
+    at a terminal has: the test stops it with them, and no terminal's Ctrl-C reaches its session.
+    """
+    return subprocess.Popen(with_stop_signals_default(cmd), env=env, stdout=log_fd,
+                            stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                            start_new_session=True)
 
 
 class NodeProcess:

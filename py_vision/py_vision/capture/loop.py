@@ -47,8 +47,8 @@ from typing import Callable, Dict, List, Mapping, Optional, Sequence
 
 from py_vision.capture.camera import Camera
 from py_vision.capture.controls import ControlInfo, Refusal
-from py_vision.capture.frame_memory import keep_frame_buffers
 from py_vision.capture.source import BusFull, Clock, Frame, MONOTONIC, SourceError
+from py_vision.frame_memory import keep_frame_buffers
 
 __all__ = ['CaptureLoop', 'CaptureStats', 'LoopTiming']
 

@@ -32,14 +32,21 @@ nothing for this frame. Everything else is optional; the base class `Step` gives
 - frame_failed(header, error): process() raised on this frame (or returned something that is
   not a bgr8 image or None). Called on the worker thread, right after; a step that drives
   something stops it here (hand_signs sends a zero command).
-- close(): the node is stopping. By then process() is never called again: the one under way
-  has returned, or (after STOP_GRACE_S) it is abandoned, and nothing it publishes any more
-  through the context's publishers goes out. What close() publishes through them is the
-  step's last word: the node then waits (up to DELIVERY_TIMEOUT_S) until every reliable
-  subscriber has acknowledged it, before its publishers are destroyed.
+- stopping(): the node has been told to stop (a signal, the end of a launch), called at once,
+  from the thread that stops the node, before the frame under way has ended: process() may
+  still be running on the worker thread, but nothing it publishes through the context's
+  publishers goes out any more. A step that drives something stops it here (hand_signs: its
+  zero command); what it publishes here is its last word.
+- close(): the node is stopping, after stopping(). By then process() is never called again:
+  the one under way has returned, or (after STOP_GRACE_S) it is abandoned. A step releases what
+  it holds here; what it publishes through the context's publishers still goes out. The node
+  then waits (up to DELIVERY_TIMEOUT_S) until every reliable subscriber has acknowledged what
+  stopping() and close() sent, before its publishers are destroyed.
 
-process() runs on the node's worker thread, one frame at a time; the other hooks and the
-timers (StepContext.create_timer) run on the executor's. A process() that raises is logged
+process() runs on the node's worker thread, one frame at a time; parameters_changed(), the
+timers (StepContext.create_timer) and the subscriptions' callbacks
+(StepContext.create_subscription) run on the executor's; stopping() and close() on the
+thread that stops the node. A process() that raises is logged
 and counted, frame_failed() is called, and the next frame is tried.
 
 Time inside models: the runtimes of py_vision.models time each model run on the thread that
@@ -121,6 +128,10 @@ class StepContext:
         """Create a publisher of the node (reliable, keep-last depth)."""
         return self.publisher_factory(self.node, msg_type, topic, depth)
 
+    def create_subscription(self, msg_type, topic: str, callback: Callable[[Any], None], qos):
+        """Subscribe to topic on the node; callback gets each message on the executor's thread."""
+        return self.node.create_subscription(msg_type, topic, callback, qos)
+
     def create_timer(self, period_s: float, callback: Callable[[], None]):
         """
         Call callback every period_s seconds of steady time, on the executor's thread.
@@ -152,6 +163,9 @@ class Step:
 
     def frame_failed(self, header: Any, error: Exception) -> None:
         """React to process() failing on the frame with this header (worker thread)."""
+
+    def stopping(self) -> None:
+        """Stop what the step drives, at once; process() may still be running (see above)."""
 
     def close(self) -> None:
         """Release what the step holds, publish its last messages; the node is stopping."""

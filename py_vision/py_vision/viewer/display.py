@@ -22,6 +22,10 @@ A camera's H.264 (`show_video`) goes to the browser as it is, for the page to de
 it is decoded here (`video_decoder`) only while someone needs pixels: a window, or a browser
 that cannot decode it (MJPEG clients, snapshots). Where this machine cannot decode, it says so
 once.
+
+Frames may be shown from any thread (a subscription's receive thread, the decoder's): the
+browser viewer takes them there; a window is drawn on the node's executor thread alone (the
+one that attached the display), to which the newest picture is handed.
 """
 
 import os
@@ -110,8 +114,10 @@ class Display:
         self._decoder = None           # decoding a camera's video while pixels are needed
         self._cannot_decode = None     # why it cannot, once said
         self._decoded = None           # the newest decoded picture, not shown yet
-        self._decoded_lock = threading.Lock()
-        self._wake = None              # runs _show_decoded on the node's executor
+        self._for_window = None        # the newest picture from another thread, for the window
+        self._handed_lock = threading.Lock()
+        self._wake = None              # runs _show_handed on the node's executor
+        self._home = None              # the executor's thread (the window's)
         if mode in ('auto', 'window'):
             reason = window_unavailable_reason()
             if reason is None:
@@ -157,8 +163,10 @@ class Display:
         if self.window_title is not None:
             # The window repaints and answers its close button also when no frame arrives.
             node.create_timer(WINDOW_EVENTS_PERIOD_S, lambda: cv2.waitKey(1))
-        # Pictures decoded on the decoder's thread are shown on the executor's, as all others.
-        self._wake = node.create_guard_condition(self._show_decoded)
+        # Pictures decoded on the decoder's thread, and those for the window from any other
+        # thread, are shown on the executor's.
+        self._home = threading.get_ident()
+        self._wake = node.create_guard_condition(self._show_handed)
 
     def _say_url_with_token(self):
         """
@@ -188,16 +196,14 @@ class Display:
     def show(self, image):
         """Show one bgr8 (or mono8) frame; cheap when nobody watches the browser viewer."""
         if self.window_title is not None:
-            cv2.imshow(self.window_title, image)
-            cv2.waitKey(1)
+            self._show_in_window(image)
         if self.viewer is not None:
             self.viewer.submit(image)
 
     def show_jpeg(self, jpeg, image=None):
         """Show a JPEG frame: the viewer forwards its bytes, a window shows image (decoded)."""
         if self.window_title is not None and image is not None:
-            cv2.imshow(self.window_title, image)
-            cv2.waitKey(1)
+            self._show_in_window(image)
         if self.viewer is not None:
             self.viewer.submit_jpeg(np.asarray(jpeg, np.uint8).tobytes())
 
@@ -243,15 +249,27 @@ class Display:
                     ' (Chromium and Edge decode H.264 themselves on a secure page: the viewer '
                     'on localhost, or through ssh -L)'))
 
+    def _show_in_window(self, image):
+        if self._wake is None or threading.get_ident() == self._home:
+            cv2.imshow(self.window_title, image)
+            cv2.waitKey(1)
+            return
+        with self._handed_lock:
+            self._for_window = image
+        self._wake.trigger()
+
     def _decoded_picture(self, picture, tag):
-        with self._decoded_lock:
+        with self._handed_lock:
             self._decoded = picture
         if self._wake is not None:
             self._wake.trigger()
 
-    def _show_decoded(self):
-        with self._decoded_lock:
+    def _show_handed(self):
+        with self._handed_lock:
             picture, self._decoded = self._decoded, None
+            for_window, self._for_window = self._for_window, None
+        if for_window is not None:
+            self._show_in_window(for_window)
         if picture is not None:
             self.show(picture)
 

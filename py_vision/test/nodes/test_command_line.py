@@ -18,6 +18,7 @@ import os
 from pathlib import Path
 import random
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -203,6 +204,25 @@ def test_a_second_sigint_does_not_cut_the_clean_up_short(launch, peer, executabl
         assert 'stopped by SIGINT' in out.splitlines()[-1], out
         if executable in STOPPED:
             assert STOPPED[executable] in out, out
+
+
+@pytest.mark.parametrize('executable', EXECUTABLES)
+def test_a_node_that_inherited_ctrl_c_ignored_still_stops_cleanly_on_it(ros_env, executable):
+    # Under a `ros2 launch` that a script started with `&` (an init script, a CI runner), every
+    # node inherits SIGINT ignored: Ctrl-C to the launch's process group, what docs/boards.md
+    # says to send, must still stop it cleanly, as a ROS node's own handler does.
+    node = ros_harness.NodeProcess(
+        shutil.which('env'), ['--ignore-signal=INT', str(ros_harness.EXECUTABLES / executable)]
+        + ros_harness.ros_args(RUNNABLE[executable]), ros_env, name=executable)
+    try:
+        node.wait_for_output(UP[executable], 30)
+        assert node.stop(signal.SIGINT, timeout=20) == 0
+        out = node.output()
+        assert 'Traceback' not in out and 'stopped by SIGINT' in out.splitlines()[-1], out
+        if executable in STOPPED:
+            assert STOPPED[executable] in out, out
+    finally:
+        node.kill()
 
 
 @pytest.mark.parametrize('executable', EXECUTABLES)

@@ -27,8 +27,11 @@ PyPI Jazzy wheels of the main run have neither: there these tests are skipped wi
 """
 
 import importlib.util
+import os
+from pathlib import Path
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import urllib.error
@@ -77,15 +80,16 @@ def ros2_launch(ros_env, request):
     """Start `ros2 launch py_vision FILE name:=value ...`; stopped (Ctrl-C) after the test."""
     started = request.node.node_processes = []
 
-    def start(launch_file, machine=None, env=None, **arguments):
+    def start(launch_file, machine=None, env=None, via=(), **arguments):
+        # via: a command that execs the rest (`env --ignore-signal=INT`), before `ros2 launch`.
         args = ['launch', 'py_vision', launch_file] + [
             '%s:=%s' % (name, value) for name, value in arguments.items()]
         if machine is None:
-            proc = ros_harness.NodeProcess(ROS2, args, env or ros_env, name=launch_file)
+            cmd = [ROS2] + args
         else:
-            proc = ros_harness.NodeProcess(
-                sys.executable, ['-c', AS_ON_MACHINE, machine, ROS2] + args, env or ros_env,
-                name=launch_file)
+            cmd = [sys.executable, '-c', AS_ON_MACHINE, machine, ROS2] + args
+        cmd = list(via) + cmd
+        proc = ros_harness.NodeProcess(cmd[0], cmd[1:], env or ros_env, name=launch_file)
         started.append(proc)
         return proc
     yield start
@@ -102,6 +106,11 @@ def parameters(peer, node, names):
 def stops_cleanly(proc, nodes):
     """Ctrl-C the launch: it and every node it started (names, repeated) end cleanly."""
     assert proc.stop(timeout=20.0) == 0, proc.tail()
+    nodes_finished_cleanly(proc, nodes)
+
+
+def nodes_finished_cleanly(proc, nodes):
+    """Every node the launch started (names, repeated) finished cleanly, launch says."""
     output = proc.output()
     for node in set(nodes):
         assert len(re.findall(r'\[%s-\d+\]: process has finished cleanly' % node, output)) \
@@ -345,3 +354,39 @@ def test_two_cameras_each_in_its_namespace_with_its_device(ros2_launch, peer):
             'video_device': 'synthetic'}
         wait_until(lambda: len(frames) >= 3, START_S, what='frames on /%s' % side)
     stops_cleanly(proc, ['usbcam_publisher', 'usbcam_publisher'])
+
+
+@needs_launch
+def test_a_launch_stops_cleanly_when_the_tests_were_started_in_the_background(
+        started_in_the_background, ros2_launch):
+    # scripts/test.sh started by a script in the background runs every test so: the launch
+    # must still stop on the test's Ctrl-C (Humble's kept the SIGINT it inherited ignored).
+    proc = ros2_launch('camera.launch.py', video_device='synthetic')
+    proc.wait_for_output(r'opened synthetic', START_S)
+    stops_cleanly(proc, ['usbcam_publisher'])
+
+
+def ignores(pid, sig):
+    """Return whether process pid ignores signal sig (/proc/PID/status)."""
+    status = Path('/proc/%d/status' % pid).read_text()
+    return bool(int(re.search(r'SigIgn:\s*([0-9a-f]+)', status).group(1), 16) & (1 << (sig - 1)))
+
+
+@needs_launch
+def test_a_launch_that_inherited_ctrl_c_ignored_stops_on_ctrl_c_to_its_process_group(
+        ros2_launch, peer):
+    # docs/boards.md: a launch a script started with `&` (an init script, a CI runner) inherits
+    # SIGINT ignored and keeps it so; SIGINT to its whole process group, as a terminal's Ctrl-C
+    # sends it, stops every node cleanly, and the launch ends with them.
+    env = shutil.which('env')
+    front = peer.collect(Image, '/front/usb_camera/image')
+    rear = peer.collect(Image, '/rear/usb_camera/image')
+    proc = ros2_launch('two_cameras.launch.py', via=[env, '--ignore-signal=INT'],
+                       front_device='synthetic', rear_device='synthetic')
+    wait_until(lambda: len(front) >= 3 and len(rear) >= 3, START_S,
+               what='frames from both cameras')
+    assert ignores(proc.pid, signal.SIGINT), proc.tail()
+    os.killpg(proc.pid, signal.SIGINT)  # the harness started it in a session of its own
+    assert proc.wait_exit(START_S) == 0, proc.tail()
+    assert 'user interrupted with ctrl-c' not in proc.output(), proc.tail()
+    nodes_finished_cleanly(proc, ['usbcam_publisher', 'usbcam_publisher'])

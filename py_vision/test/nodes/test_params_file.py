@@ -168,3 +168,19 @@ def test_a_parameter_file_after_a_parameter_wins(launch, tmp_path):
     proc.wait_for_output(r'opened synthetic: 320x240 ')
     segment = shared_memory_segment(proc)
     assert room_for(320, 240) <= segment < room_for(1280, 720)
+
+
+BASE_FILE = SHARE / 'config' / 'hand_signs_base.yaml'
+
+
+def test_the_real_base_file_runs_hand_signs_with_exactly_its_values(launch, peer):
+    # config/hand_signs_base.yaml, as docs/processing.md tells a user with a real base to start:
+    # every name in it is a parameter of hand_signs (or the node's), every value accepted.
+    parameters = yaml.safe_load(BASE_FILE.read_text())['vision_step']['ros__parameters']
+    proc = launch('vision_step', params={'web_port': 0},
+                  extra_args=['--params-file', str(BASE_FILE)])
+    proc.wait_for_output('moving only while /hand_signs/enable says true', timeout=90.0)
+    assert 'Twist on /hand_signs/cmd_vel' in proc.output()
+    running = running_parameters(peer, proc, 'vision_step')
+    assert sorted(set(parameters) - set(running)) == []
+    assert typed({name: running[name] for name in parameters}) == typed(parameters)

@@ -15,8 +15,10 @@
 
 """The tests' own harness: what its helpers promise the tests that use them."""
 
+import signal
 import sys
 
+import pytest
 import ros_harness
 
 
@@ -50,3 +52,32 @@ def test_a_node_ended_by_a_signal_is_named_by_it_in_its_log_tail(tmp_path):
     assert 'exit status' not in tail
     assert ros_harness.signal_name(2) == 'SIGINT'
     assert ros_harness.signal_name(200) == 'signal 200'
+
+
+# A program that waits and leaves stopping to Python's defaults, as Humble's `ros2 launch` leaves
+# Ctrl-C to Python's own SIGINT handler: Python installs that handler only where SIGINT was not
+# ignored at its start.
+WAITS = 'import time; print("waiting", flush=True); time.sleep(60)'
+
+
+@pytest.mark.parametrize('sig', ros_harness.STOP_SIGNALS, ids=lambda sig: sig.name)
+def test_a_process_it_starts_stops_on_a_signal_the_tests_ignore(tmp_path, sig):
+    # scripts/test.sh started by a script in the background (a non-interactive shell's `&`)
+    # runs the tests with SIGINT ignored, nohup with SIGHUP: the processes the tests start
+    # must still stop on it, as the same command typed at a terminal does.
+    with ros_harness.signals_ignored(sig):
+        proc = ros_harness.NodeProcess(sys.executable, ['-c', WAITS],
+                                       dict(ros_harness.plain_env()), name='waiting',
+                                       log_dir=str(tmp_path))
+    try:
+        proc.wait_for_output('waiting')
+        assert proc.stop(sig, timeout=10.0) == -sig, proc.tail()
+    finally:
+        proc.kill()
+
+
+def test_signals_ignored_gives_back_what_was_there():
+    before = [signal.getsignal(sig) for sig in ros_harness.STOP_SIGNALS]
+    with ros_harness.signals_ignored(*ros_harness.STOP_SIGNALS):
+        assert all(signal.getsignal(sig) is signal.SIG_IGN for sig in ros_harness.STOP_SIGNALS)
+    assert [signal.getsignal(sig) for sig in ros_harness.STOP_SIGNALS] == before

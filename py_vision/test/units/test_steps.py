@@ -16,8 +16,9 @@
 The step loader, and the built-in model steps without a ROS graph.
 
 hand_signs with a stand-in tracker (landmarks written by hand, hand_poses): each sign's Twist,
-the hold before a sign moves the robot, the zero commands of the watchdog (a fake clock), of a
-failure, of a stale frame and of the stop, TwistStamped; with its real models on photographs,
+the hold before a sign moves the robot, min_drive_score, the speed caps, the zero commands of
+the watchdog (a fake clock), of a failure, of a stale frame, of the enable input and of the
+stop, TwistStamped stamped when sent; with its real models on photographs,
 min_score below 0.5 letting through a palm (or a hand) scoring between it and 0.5. faces with a
 model double whose scores are lowered: min_score below 0.5 letting through a face scoring less.
 """
@@ -32,15 +33,15 @@ from hand_poses import FOLDED, place, pose, THUMB_ACROSS, thumb_up
 import numpy as np
 from photos import hand_photo, photo
 from py_vision.models.hands import Hand
-from py_vision.params import Spec
+from py_vision.params import ConfigError, Spec
 from py_vision.steps import loader
 from py_vision.steps.api import StepContext
 from py_vision.steps.circle import Circle
 from py_vision.steps.faces import Faces
-from py_vision.steps.hand_signs import HandSigns, MAX_ANGULAR, MAX_LINEAR, motion
+from py_vision.steps.hand_signs import DRIVE_SCORE_FLOOR, HandSigns, motion, twist_of
 from py_vision.vision_step import StepPublishers, VisionStep
 import pytest
-from std_msgs.msg import Header, String
+from std_msgs.msg import Bool, Header, String
 
 
 def test_built_in_steps_are_found_by_their_short_names():
@@ -78,14 +79,17 @@ def test_a_step_parameter_may_not_take_the_name_of_the_nodes_own():
     ('no_hand', (0.0, 0.0)),
 ])
 def test_each_sign_has_its_motion_and_the_rest_stand_still(sign, expected):
-    twist = motion(sign, 1.5, 0.5)
+    twist = twist_of(motion(sign, 1.5, 0.5))
     assert (twist.linear.x, twist.angular.z) == expected
     assert (twist.linear.y, twist.linear.z, twist.angular.x, twist.angular.y) == (0, 0, 0, 0)
 
 
-def test_speeds_are_clamped():
-    assert motion('thumb_up', 100.0, 100.0).linear.x == MAX_LINEAR
-    assert motion('point_right', 100.0, 100.0).angular.z == -MAX_ANGULAR
+def test_min_drive_score_is_never_below_the_floor():
+    spec = next(spec for spec in HandSigns.PARAMETERS if spec.name == 'min_drive_score')
+    assert spec.coerce(DRIVE_SCORE_FLOOR) == DRIVE_SCORE_FLOOR
+    with pytest.raises(ConfigError, match='min_drive_score: 0.1 is not accepted; expected '
+                       '0.2..1'):
+        spec.coerce(0.1)
 
 
 class FakePublisher:
@@ -106,11 +110,19 @@ class FakeNode:
 
     def __init__(self):
         self.publishers = {}
+        self.subscriptions = {}
         self.timers = []
 
     def create_publisher(self, msg_type, topic, depth):
         self.publishers[topic] = FakePublisher(msg_type, topic)
         return self.publishers[topic]
+
+    def create_subscription(self, msg_type, topic, callback, qos):
+        self.subscriptions[topic] = callback
+
+        class Subscription:
+            topic_name = topic
+        return Subscription()
 
     def create_timer(self, period, callback, clock=None):
         self.timers.append((period, callback))
@@ -145,13 +157,22 @@ def defaults(step_class, **changes):
 
 
 class SignsUnderTest:
-    """A HandSigns started on a FakeNode with a stand-in tracker, and what it published."""
+    """
+    A HandSigns started on a FakeNode with a stand-in tracker, and what it published.
+
+    Its gate runs on a fake clock from the start (its watchdog thread, waiting on real time,
+    finds nothing due unless the test moves the clock); one copy of each stop and no hold_time
+    unless asked.
+    """
 
     def __init__(self, frame_age=lambda: 0.01, **parameters):
         self.node = FakeNode()
         self.step = HandSigns()
         self.age = frame_age
         self.watched = True  # whether the step's output image is published or shown
+        parameters = dict({'stop_repeats': 1, 'hold_time': 0.0}, **parameters)
+        self.clock = self.step.clock = FakeClock()
+        self.step.sleep = self.clock.sleep
         self.note = self.step.start(StepContext(
             node=self.node, logger=None, parameters=defaults(HandSigns, **parameters),
             frame_age=lambda: self.age(), output_wanted=lambda: self.watched))
@@ -188,11 +209,16 @@ def test_hand_signs_publishes_the_sign_and_its_twist_and_zero_below_min_score():
     # The same hand scoring below min_score, or no hand: no_hand and a zero Twist.
     assert test.frame([Hand(thumb_up(), 'right', 0.3)])[:2] == ('no_hand', (0.0, 0.0))
     assert test.frame([])[:2] == ('no_hand', (0.0, 0.0))
-    # A lower min_score, set live, lets it through (and reaches the tracker's thresholds).
+    # A lower min_score, set live, lets it through (and reaches the tracker's thresholds): its
+    # sign is published and drawn, but below min_drive_score it does not drive.
     tracker = test.step.tracker
     tracker.min_hand_score = tracker.min_palm_score = 0.5
     assert test.step.parameters_changed({'min_score': 0.2}) is None
     assert (tracker.min_hand_score, tracker.min_palm_score) == (0.2, 0.2)
+    sign, moving, out = test.frame([Hand(thumb_up(), 'right', 0.3)])
+    assert (sign, moving) == ('thumb_up', (0.0, 0.0))
+    assert (out != 0).any(axis=2).sum() > 500
+    assert test.step.parameters_changed({'min_drive_score': 0.25}) is None
     assert test.frame([Hand(thumb_up(), 'right', 0.3)])[:2] == ('thumb_up', (1.5, 0.0))
     # Above 0.5 the palm detector keeps MediaPipe's 0.5; the hand's score must reach it.
     test.step.parameters_changed({'min_score': 0.8})
@@ -228,17 +254,15 @@ def test_hand_signs_watchdog_failure_stale_frame_and_stop_each_send_one_zero():
     age = [0.01]
     test = SignsUnderTest(frame_age=lambda: age[0], hold_frames=1, command_timeout=0.5,
                           max_frame_age=0.3)
-    clock = test.step.gate.clock = FakeClock()
-    # The watchdog's timer: a few times per command_timeout, calling the gate's check.
-    [(period, check)] = test.node.timers
-    assert period == pytest.approx(0.1)
+    clock = test.clock
+    assert test.node.timers == []  # the watchdog is a thread of the gate's, not a timer
     assert test.frame([THUMB_UP])[1] == (1.0, 0.0)
     clock.t += 0.3
-    check()
+    test.step.gate.check()
     assert test.commands() == [(1.0, 0.0)]
     clock.t += 0.3  # no frame for 0.6 s: one zero, then nothing
-    check()
-    check()
+    test.step.gate.check()
+    test.step.gate.check()
     assert test.commands() == [(1.0, 0.0), (0.0, 0.0)]
     # The step failing on a frame (the node calls frame_failed): one zero.
     test.frame([THUMB_UP])
@@ -252,16 +276,42 @@ def test_hand_signs_watchdog_failure_stale_frame_and_stop_each_send_one_zero():
     test.step.process(test.image.copy(), Header(frame_id='camera'))
     assert test.signs.sent[-1].data == 'fist'
     assert test.commands()[4:] == [(1.0, 0.0), (0.0, 0.0)]
-    # The stop: a last zero, and a frame still being processed sends nothing after it.
+    # The stop (at once, the frame under way not awaited): a last zero, and a frame still being
+    # processed sends nothing after it; the watchdog's thread has ended.
     age[0] = 0.01
     test.frame([THUMB_UP])
-    test.step.close()
+    test.step.stopping()
+    assert not test.step.watchdog._thread.is_alive()
     test.step.tracker.hands = [THUMB_UP]
     test.step.process(test.image.copy(), Header(frame_id='camera'))
+    test.step.close()
     assert test.commands()[6:] == [(1.0, 0.0), (0.0, 0.0)]
 
 
-def test_hand_signs_stamped_commands_carry_the_frames_header_and_the_zeros_now():
+def test_hand_signs_caps_the_speeds_for_the_base():
+    test = SignsUnderTest(hold_frames=1, linear_speed=2.0, angular_speed=3.0,
+                          max_linear_speed=0.3, max_angular_speed=0.8)
+    assert test.frame([THUMB_UP])[1] == (0.3, 0.0)
+    test.step.parameters_changed({'linear_speed': 1.5})  # live, still capped
+    assert test.frame([THUMB_UP])[1] == (0.3, 0.0)
+
+
+def test_hand_signs_with_an_enable_topic_moves_only_while_it_says_true():
+    test = SignsUnderTest(hold_frames=1, enable_topic='/hand_signs/enable',
+                          enable_timeout=0.5)
+    assert 'moving only while /hand_signs/enable says true (within 0.5 s)' in test.note
+    enable = test.node.subscriptions['/hand_signs/enable']
+    sent = len(test.twists.sent)
+    test.step.tracker.hands = [THUMB_UP]
+    test.step.process(test.image.copy(), Header())
+    assert len(test.twists.sent) == sent  # not enabled: nothing sent
+    enable(Bool(data=True))
+    assert test.frame([THUMB_UP])[1] == (1.0, 0.0)
+    enable(Bool(data=False))
+    assert test.commands()[-1] == (0.0, 0.0)
+
+
+def test_hand_signs_stamped_commands_are_stamped_when_sent_with_frame_id():
     test = SignsUnderTest(cmd_vel_stamped=True, hold_frames=1)
     assert 'TwistStamped on /turtle1/cmd_vel' in test.note, test.note
     header = Header(frame_id='front_camera', stamp=Time(sec=12, nanosec=34))
@@ -270,9 +320,12 @@ def test_hand_signs_stamped_commands_carry_the_frames_header_and_the_zeros_now()
     test.step.close()
     moving, zero = test.twists.sent
     assert isinstance(moving, TwistStamped) and speeds(moving) == (1.0, 0.0)
-    assert moving.header == header
+    assert moving.header == Header(frame_id='base_link', stamp=FakeNode.NOW)
     assert speeds(zero) == (0.0, 0.0)
-    assert zero.header == Header(frame_id='front_camera', stamp=FakeNode.NOW)
+    assert zero.header == Header(frame_id='base_link', stamp=FakeNode.NOW)
+    test = SignsUnderTest(cmd_vel_stamped=True, hold_frames=1, frame_id='odom')
+    test.frame([THUMB_UP])
+    assert test.twists.sent[-1].header.frame_id == 'odom'
 
 
 # min_score below 0.5 with the real models, on photographs whose scores are known (LiteRT and

@@ -29,15 +29,42 @@ CPython 3.10 on aarch64 Linux (manylinux_2_34), installed unchanged."
 HOMEPAGE = "https://www.tensorflow.org/lite/"
 SECTION = "devel/python"
 
-# The wheel's METADATA says "License: Apache 2.0" and carries no licence file of its own:
-# the licence text is the one every Yocto build has.
-LICENSE = "Apache-2.0"
-LIC_FILES_CHKSUM = "file://${COMMON_LICENSE_DIR}/Apache-2.0;md5=89aea4e17d99a7cacdbeed46a0096b10"
+# The licences of what the wheel installs. Its METADATA says "License: Apache 2.0", and it
+# carries no licence file. Apache-2.0 covers TensorFlow Lite itself and the Apache-2.0
+# libraries built into its extension module (abseil, flatbuffers, gemmlowp, ruy). That module,
+# _pywrap_tensorflow_interpreter_wrapper.so, also holds these libraries, linked in statically
+# (their symbols are in it), each under its own licence:
+# - XNNPACK (its kernels): BSD-3-Clause;
+# - pthreadpool and cpuinfo: BSD-2-Clause;
+# - Eigen: MPL-2.0 (TensorFlow builds it with EIGEN_MPL2_ONLY, so no LGPL part of it is in;
+#   Eigen::half's float conversions keep Fabian Giesen's notice, a BSD-style permission that
+#   asks nothing);
+# - farmhash, and FP16 (XNNPACK's half-precision conversions): MIT;
+# - pybind11 (the Python binding): BSD-3-Clause;
+# - fft2d, Takuya Ooura's FFT package: its own licence, use, copying and changes for any
+#   purpose without fee, distribution of the original package. Yocto has no text of it:
+#   files/readme2d.txt is the package's own readme with it (lines 67 to 70), unchanged from
+#   the OouraFFT-1.0 archive TensorFlow builds fft2d from
+#   (https://github.com/petewarden/OouraFFT, tag v1.0, commit c6fd2dd6; TensorFlow Lite's
+#   CMake build names this file as fft2d's licence).
+# The generic texts are the ones every Yocto build has (COMMON_LICENSE_DIR).
+LICENSE = "Apache-2.0 & BSD-3-Clause & BSD-2-Clause & MPL-2.0 & MIT & Ooura-fft2d"
+LIC_FILES_CHKSUM = "\
+    file://${COMMON_LICENSE_DIR}/Apache-2.0;md5=89aea4e17d99a7cacdbeed46a0096b10 \
+    file://${COMMON_LICENSE_DIR}/BSD-3-Clause;md5=550794465ba0ec5312d6919e203a55f9 \
+    file://${COMMON_LICENSE_DIR}/BSD-2-Clause;md5=cb641bc04cda31daea161b1bc15da69f \
+    file://${COMMON_LICENSE_DIR}/MPL-2.0;md5=815ca599c9df247a0c7f619bab123dad \
+    file://${COMMON_LICENSE_DIR}/MIT;md5=0835ade698e0bcf8506ecda2f7b4f302 \
+    file://readme2d.txt;beginline=67;endline=70;md5=4f01a5fd045b8e9c56c61a218356fea7 \
+"
+NO_GENERIC_LICENSE[Ooura-fft2d] = "readme2d.txt"
 
 # The wheel, pinned by its sha256 (the one PyPI lists for this file). Not unpacked by the
 # fetcher (a .whl is not an archive type it knows): it is copied into ${WORKDIR} as it is.
 SRC_URI = "https://files.pythonhosted.org/packages/04/dd/a701667be92bb884644eeec91ebbde57e197d27d9a79241169b6ce15e1ad/tflite_runtime-2.14.0-cp310-cp310-manylinux_2_34_aarch64.whl"
 SRC_URI[sha256sum] = "d38c6885f5e9673c11a61ccec5cad7c032ab97340718d26b17794137f398b780"
+# fft2d's licence text (above), from files/: the licence checks read it from ${S}.
+SRC_URI += "file://readme2d.txt"
 
 WHEEL = "tflite_runtime-${PV}-cp310-cp310-manylinux_2_34_aarch64.whl"
 S = "${WORKDIR}"
@@ -51,8 +78,10 @@ do_compile() {
     install -m 0644 ${WORKDIR}/${WHEEL} ${PEP517_WHEEL_PATH}/
 }
 
-# The wheel holds machine code for aarch64 with glibc (manylinux): nothing else can run it.
-COMPATIBLE_HOST = "aarch64.*-linux"
+# The wheel holds machine code for little-endian aarch64 with glibc (manylinux): nothing else
+# can run it. The pattern matches HOST_SYS from its start: aarch64-<vendor>-linux, not
+# big-endian aarch64_be-<vendor>-linux; a musl build is refused by the second line.
+COMPATIBLE_HOST = "aarch64-.*-linux"
 COMPATIBLE_HOST:libc-musl = "null"
 
 python () {
