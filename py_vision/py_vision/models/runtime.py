@@ -248,7 +248,9 @@ class _TfliteModel(RuntimeModel):
             self._interpreter.set_tensor(detail['index'], array)
         with timing():
             self._interpreter.invoke()
-        return [self._interpreter.get_tensor(detail['index']).copy()
+        # get_tensor returns a copy of its own (LiteRT and tflite_runtime alike): not copied
+        # again (the palm detector's 150 kB a frame).
+        return [self._interpreter.get_tensor(detail['index'])
                 for detail in self._output_details]
 
 
