@@ -156,8 +156,8 @@ def main(argv=None):
             name = names.get(tid) or ('the executor' if tid == node.pid else 'native')
             groups[name] += user + system - before[tid][1] - before[tid][2]
     last = stats[-1].split(']: ')[-1] if stats else ''
-    print('%s, %dx%d at %g fps, %g s; %s' % (args.case, size[0], size[1], FPS, args.seconds,
-                                            last))
+    print('%s, %dx%d at %g fps, %g s; %s' % (
+        args.case, size[0], size[1], FPS, args.seconds, last))
     print('\n| thread | CPU ms a frame |\n|---|---:|')
     for name, ticks in groups.most_common():
         print('| %s | %.2f |' % (name, 1e3 * ticks / CLK_TCK / frames))
