@@ -24,7 +24,8 @@ picture or the looping clip of a hand, vision_step with `threads` 1, nobody watc
 image). Over one window, each thread's CPU a frame from /proc/PID/task (the worker that runs
 the step, the thread that receives the frames, the executor, the rest: Fast DDS' and the
 command gate's); over the next, py-spy's samples of the worker (`py-spy record`, on-CPU
-samples only) say which stage its CPU went to: the models' invokes, making their inputs (the
+samples only, the process paused for each: a stack read while it runs may be torn) say which
+stage its CPU went to: the models' invokes, making their inputs (the
 palm detector's letterboxed frame, the landmark model's rotated crop), decoding, the landmarks
 and the next region, the sign, publishing the sign and the command through the gate, the
 bridge and the node's own bookkeeping. A stage's milliseconds are its share of the samples
@@ -95,7 +96,7 @@ def stage_shares(pid, seconds):
     with tempfile.TemporaryDirectory() as folder:
         out = os.path.join(folder, 'samples.txt')
         subprocess.run([spy, 'record', '-p', str(pid), '-d', str(int(seconds)), '-r', '200',
-                        '--format', 'raw', '--threads', '--nonblocking', '-o', out],
+                        '--format', 'raw', '--threads', '-o', out],
                        capture_output=True, timeout=seconds + 60)
         with open(out) as stream:
             lines = stream.read().splitlines()
