@@ -25,6 +25,12 @@ Each item's arrival (the clock when it was offered) goes with it: `frame_age()`,
 the step, says how long ago the item it works on arrived, measured on this host whatever the
 item's own stamps say.
 
+The worker also adds up the CPU time its thread spent in the steps (`cpu_ms`, since start).
+With a `part_clock` (the wall and CPU seconds the worker's thread has spent so far in one part
+of the work: vision_step gives it the time inside models, py_vision.models.model_time), each
+item's time is split into that part and the rest, both with their percentiles, and the part's
+CPU time is added up too.
+
 No ROS here: the node supplies the step and reports how old each of its outputs is.
 """
 
@@ -58,12 +64,19 @@ class _RecentValues:
     def add(self, value: float) -> None:
         self._values.append((self._clock(), value))
 
-    def percentiles_ms(self) -> Tuple[Optional[float], Optional[float]]:
-        """Return (p50, p99) in milliseconds, or (None, None) when the window is empty."""
+    def _recent(self) -> Deque[Tuple[float, float]]:
         horizon = self._clock() - self.window_s
         while self._values and self._values[0][0] < horizon:
             self._values.popleft()
-        values = sorted(value for _, value in self._values)
+        return self._values
+
+    def count(self, condition: Callable[[float], bool]) -> int:
+        """Return how many of the window's values meet condition."""
+        return sum(1 for _, value in self._recent() if condition(value))
+
+    def percentiles_ms(self) -> Tuple[Optional[float], Optional[float]]:
+        """Return (p50, p99) in milliseconds, or (None, None) when the window is empty."""
+        values = sorted(value for _, value in self._recent())
         if not values:
             return None, None
         return (round(percentile(values, 0.5) * 1e3, 2),
@@ -77,7 +90,10 @@ class LatestFrameWorker(Generic[T]):
     Counts since start: items offered (`frames_in`), steps run (`processed`) and items
     replaced before a step took them (`skipped`); frames_in = processed + skipped + the one
     waiting or in progress. Over the last window_s seconds: how long a step took and how old
-    the outputs were (`record_age()`), p50 and p99.
+    the outputs were (`record_age()`), p50 and p99; with a part_clock, how much of each step's
+    time was in that part and how much was the rest, p50 and p99, and how many of those steps
+    spent any time in the part. The CPU time of the steps (`cpu_ms`) and of their part
+    (`part_cpu_ms`): since start, whole milliseconds.
 
     A step that raises is reported through on_error (default: a traceback on stderr) and
     the worker goes on with the next item.
@@ -86,8 +102,13 @@ class LatestFrameWorker(Generic[T]):
     def __init__(self, process: Callable[[T], None], *,
                  on_error: Callable[[Exception], None] = print_error,
                  window_s: float = 5.0, name: str = 'latest_frame',
-                 clock: Callable[[], float] = time.monotonic):
+                 clock: Callable[[], float] = time.monotonic,
+                 part_clock: Optional[Callable[[], Tuple[float, float]]] = None,
+                 cpu_clock: Callable[[], float] = time.thread_time):
         self._process = process
+        self._part_clock = part_clock
+        self._cpu_clock = cpu_clock
+        self._cpu_s = self._part_cpu_s = 0.0  # since start
         self._on_error = on_error
         self._clock = clock
         self._cond = threading.Condition()
@@ -100,6 +121,8 @@ class LatestFrameWorker(Generic[T]):
         self.skipped = 0
         self._processing_s = _RecentValues(window_s, clock)
         self._age_s = _RecentValues(window_s, clock)
+        self._part_s = _RecentValues(window_s, clock)
+        self._rest_s = _RecentValues(window_s, clock)
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
         self._thread.start()
 
@@ -139,6 +162,7 @@ class LatestFrameWorker(Generic[T]):
         with self._cond:
             processing = self._processing_s.percentiles_ms()
             age = self._age_s.percentiles_ms()
+            part, rest = self._part_s.percentiles_ms(), self._rest_s.percentiles_ms()
             return {
                 'frames_in': self.frames_in,
                 'processed': self.processed,
@@ -147,6 +171,13 @@ class LatestFrameWorker(Generic[T]):
                 'processing_ms_p99': processing[1],
                 'age_ms_p50': age[0],
                 'age_ms_p99': age[1],
+                'part_ms_p50': part[0],
+                'part_ms_p99': part[1],
+                'rest_ms_p50': rest[0],
+                'rest_ms_p99': rest[1],
+                'part_items': self._part_s.count(lambda seconds: seconds > 0),
+                'cpu_ms': int(round(self._cpu_s * 1e3)),
+                'part_cpu_ms': int(round(self._part_cpu_s * 1e3)),
             }
 
     def close(self, timeout: float = 1.0) -> bool:
@@ -177,7 +208,8 @@ class LatestFrameWorker(Generic[T]):
                     return
                 item, self._waiting = self._waiting, _EMPTY
                 self._arrived = self._waiting_since
-            start = self._clock()
+            part = self._part_clock() if self._part_clock is not None else (0.0, 0.0)
+            start, cpu = self._clock(), self._cpu_clock()
             try:
                 self._process(item)
             except Exception as error:
@@ -186,8 +218,16 @@ class LatestFrameWorker(Generic[T]):
                     self._on_error(error)
             finally:
                 self._arrived = None
-            took = self._clock() - start
+            took, cpu = self._clock() - start, self._cpu_clock() - cpu
+            if self._part_clock is not None:
+                wall, part_cpu = self._part_clock()
+                part = (min(took, wall - part[0]), part_cpu - part[1])
             del item  # a frame is large: do not hold it while waiting for the next one
             with self._cond:
                 self.processed += 1
                 self._processing_s.add(took)
+                self._cpu_s += cpu
+                if self._part_clock is not None:
+                    self._part_s.add(part[0])
+                    self._rest_s.add(took - part[0])
+                    self._part_cpu_s += part[1]

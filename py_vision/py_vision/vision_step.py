@@ -34,6 +34,10 @@ subscription's own thread (transport.subscribe), which offers them to the worker
 executor runs the rest. cv_bridge_test is this node running the `circle` step under its own
 name and topic.
 
+The statistics line (every STATS_PERIOD_S) and /diagnostics give a frame's processing time,
+split into the time inside the step's models (their runtimes time each run on the worker's
+thread: steps.api.models_clock) and the rest: converting, the step's own work, publishing.
+
 At stop (close()), in this order: no frame is taken any more; what the step publishes
 through its context from the worker thread is dropped from then on (StepPublishers); the
 step's stopping() stops what it drives at once (hand_signs: its zero command), without waiting
@@ -50,6 +54,7 @@ import time
 import traceback
 from typing import Any, List, Optional, Sequence, Tuple
 
+import cv2
 import numpy as np
 from py_vision import dds, ros_arguments
 from py_vision.control_descriptor import step_constraints
@@ -61,8 +66,8 @@ from py_vision.params import Parameters, Spec, viewer_specs
 from py_vision.qos import publisher_qos
 from py_vision.stats import stamp_age_s, StreamStats
 from py_vision.steps import loader
-from py_vision.steps.api import DELIVERY_TIMEOUT_S, ProcessesFrames, step_parameters
-from py_vision.steps.api import StepContext, STOP_GRACE_S
+from py_vision.steps.api import DELIVERY_TIMEOUT_S, models_clock, ProcessesFrames
+from py_vision.steps.api import step_parameters, StepContext, STOP_GRACE_S
 from py_vision.throttled_log import ThrottledLog
 from py_vision.transport import ImagePublisher, MAX_IMAGE, subscribe, TRANSPORTS
 from py_vision.viewer.display import Display, DISPLAYS
@@ -88,7 +93,8 @@ STEP_SPECS = (
     Spec('step', 'circle', 'the processing step: a built-in one (%s) or your own as '
          'module.path:Class (docs/processing.md)' % ', '.join(loader.BUILT_IN), check=bool,
          accepted='%s or module.path:Class' % ', '.join(loader.BUILT_IN)),
-    Spec('threads', 1, 'CPU threads a step may give its model runtime', (1, MAX_THREADS)),
+    Spec('threads', 1, "CPU threads a step may give its model runtime (and OpenCV's own in "
+         'this process)', (1, MAX_THREADS)),
 )
 
 
@@ -134,12 +140,26 @@ class ProcessingStats:
             self.published += 1
 
     def snapshot(self) -> dict:
-        """Return the output's rate, latency and size, with the worker's counts and times."""
+        """
+        Return the output's rate, latency and size, with the worker's counts and times.
+
+        The processing times split into the models' (time inside their runs, as the runtimes
+        measure it) and the rest, each frame's: models_ms_p50/p99, rest_ms_p50/p99, and
+        frames_with_models, how many frames of the window ran a model at all. Since start, the
+        worker thread's CPU time in processing (processing_cpu_ms) and of it in models
+        (models_cpu_ms).
+        """
         with self._lock:
             output = self._output.snapshot()
             output.update(failed=self.failed, nothing_returned=self.empty,
                           published=self.published)
-        return dict(output, **self.worker.snapshot())
+        worker = self.worker.snapshot()
+        split = {'models_ms_p50': worker.pop('part_ms_p50'),
+                 'models_ms_p99': worker.pop('part_ms_p99'),
+                 'frames_with_models': worker.pop('part_items'),
+                 'processing_cpu_ms': worker.pop('cpu_ms'),
+                 'models_cpu_ms': worker.pop('part_cpu_ms')}
+        return dict(output, **worker, **split)
 
 
 def _where(error: BaseException) -> str:
@@ -264,6 +284,11 @@ class VisionStep(Node):
         super().__init__(self.NODE_NAME)
         params = Parameters(self)
         values = {spec.name: params.declare(spec) for spec in self.NODE_PARAMETERS}
+        if 'threads' in values:
+            # OpenCV's pool too: with more threads than the step may use, a model's input
+            # (a 224x224 crop) was warped on two, the second spinning between frames (OpenCV
+            # 5: 0.2 ms of CPU more a warp); OpenCV's DNN runtime takes its threads from here.
+            cv2.setNumThreads(values['threads'])
         self.step_name = self.FIXED_STEP or values['step']
         self.step_target, step_class = loader.find(self.step_name)
         specs = step_parameters(step_class)
@@ -287,7 +312,8 @@ class VisionStep(Node):
         # offers, so the executor never falls behind; keep-last 1 means that even when it is
         # held up, DDS keeps only the newest frame for it; the slot holds one frame.
         self.worker = LatestFrameWorker(self.process, on_error=self._worker_failed,
-                                        window_s=STATS_PERIOD_S, name='processing')
+                                        window_s=STATS_PERIOD_S, name='processing',
+                                        part_clock=models_clock)
         self.stats = ProcessingStats(self.worker)
         self._failures = ThrottledLog(self.get_logger(), ERROR_LOG_PERIOD_S)
         self._last_failure = ''
@@ -295,7 +321,8 @@ class VisionStep(Node):
         note = loader.start(self.step_name, self.step, StepContext(
             node=self, logger=self.get_logger(), parameters=step_values,
             threads=values.get('threads', 1), cancelled=lambda: self.worker.closed,
-            frame_age=self.worker.frame_age, publisher_factory=self.step_publishers.create))
+            frame_age=self.worker.frame_age, publisher_factory=self.step_publishers.create,
+            output_wanted=self._output_wanted))
         self.subscription_ = subscribe(self, 'usb_camera/image', values['image_transport'],
                                        self.worker.offer, depth=1,
                                        max_image_mb=values['max_image_mb'])
@@ -319,6 +346,11 @@ class VisionStep(Node):
         return 'running step %s%s on images from %s, publishing them on %s%s' % (
             self.step_name, target, self.subscription_.topic_name,
             self.publisher_.topic_name, '; %s' % note if note else '')
+
+    def _output_wanted(self) -> bool:
+        """Return True while the step's output is published or shown (StepContext's)."""
+        return (self.display.active or self.images.wants_raw()
+                or self.images.wants_compressed())
 
     def _parameter_applier(self, name):
         def apply(value):
@@ -426,8 +458,8 @@ class VisionStep(Node):
         if s['failed']:
             line += ', step failed on %d' % s['failed']
         if s['processing_ms_p50'] is not None:
-            line += ', processing p50 %.1f ms p99 %.1f ms' % (
-                s['processing_ms_p50'], s['processing_ms_p99'])
+            line += ', processing p50 %.1f ms p99 %.1f ms (%s)' % (
+                s['processing_ms_p50'], s['processing_ms_p99'], _split_text(s))
         if s['age_ms_p50'] is not None:
             line += ', output age p50 %.1f ms p99 %.1f ms, %.1f fps out' % (
                 s['age_ms_p50'], s['age_ms_p99'], s['fps'])
@@ -447,6 +479,11 @@ class VisionStep(Node):
                   'images published': s['published'],
                   'processing p50 ms': s['processing_ms_p50'],
                   'processing p99 ms': s['processing_ms_p99'],
+                  'models p50 ms': s['models_ms_p50'], 'models p99 ms': s['models_ms_p99'],
+                  'rest p50 ms': s['rest_ms_p50'], 'rest p99 ms': s['rest_ms_p99'],
+                  'frames running models': s['frames_with_models'],
+                  'processing CPU ms': s['processing_cpu_ms'],
+                  'models CPU ms': s['models_cpu_ms'],
                   'output age p50 ms': s['age_ms_p50'], 'output age p99 ms': s['age_ms_p99'],
                   'output rate': float(s['fps'])}
         simulated = getattr(self.step, 'simulated_work_s', None)
@@ -468,8 +505,8 @@ class VisionStep(Node):
                           values)
         if s['processing_ms_p50'] is None:
             return Status(OK, 'no frames on %s lately' % self.subscription_.topic_name, values)
-        return Status(OK, 'keeping up: processing p50 %.1f ms' % s['processing_ms_p50'],
-                      values)
+        return Status(OK, 'keeping up: processing p50 %.1f ms (%s)' % (
+            s['processing_ms_p50'], _split_text(s)), values)
 
     def close(self):
         """
@@ -512,6 +549,13 @@ def marked(spec: Spec, step_name: str) -> Spec:
     """Return spec with its descriptor marked as a parameter of the step (the viewer's panel)."""
     return dataclasses.replace(spec, constraints=step_constraints(
         step_name, spec.choices, spec.constraints or spec.accepted))
+
+
+def _split_text(s: dict) -> str:
+    """Return how a snapshot's processing time splits: models and the rest, p50 each."""
+    if not s['frames_with_models']:
+        return 'no model ran'
+    return 'p50: models %.1f ms, rest %.1f ms' % (s['models_ms_p50'], s['rest_ms_p50'])
 
 
 def _described(value: Any) -> str:

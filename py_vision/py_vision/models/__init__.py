@@ -19,6 +19,8 @@ Models on camera frames, without ROS: the runtimes and MediaPipe's hand and face
 - `runtime`: `load(path)` a .tflite or .onnx model into whichever runtime is installed
   (`Model`, `ModelError`, `RuntimeMissing`), quantised ones fed and read in float;
   `find_outputs`, a model's outputs by name;
+- `model_time`: the time a thread spent inside models (each runtime's run, timed), which
+  vision_step reports beside a frame's processing time;
 - `onnx_graph`: an ONNX file's inputs and outputs (and their quantisation), read without the
   onnx package;
 - `files`: `shipped_model(name)`, the model files installed with the package;

@@ -35,7 +35,7 @@ import math
 from typing import List, Sequence, Tuple
 
 import numpy as np
-from py_vision.models.crops import letterbox
+from py_vision.models.crops import InputBuffers, letterbox
 from py_vision.models.runtime import find_outputs, Model
 
 __all__ = ['AnchorOptions', 'decode', 'DecodeOptions', 'Detections', 'iou', 'SsdDetector',
@@ -138,9 +138,15 @@ def decode(regressors: np.ndarray, raw_scores: np.ndarray, anchors: np.ndarray,
     if regressors.shape[1] < 4 + 2 * options.num_keypoints:
         raise ValueError('regressors have %d values per anchor, the options want %d'
                          % (regressors.shape[1], 4 + 2 * options.num_keypoints))
-    logits = np.clip(raw_scores.reshape(-1), -options.score_clipping, options.score_clipping)
+    count = options.num_keypoints
+    raw_scores = raw_scores.reshape(-1)
+    if _none_near(raw_scores, options):  # the usual frame: nothing to decode
+        return _no_detections(count)
+    logits = np.clip(raw_scores, -options.score_clipping, options.score_clipping)
     scores = 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
     keep = np.flatnonzero(scores >= options.min_score)
+    if not len(keep):  # no anchor scores enough
+        return _no_detections(count)
     raw = regressors[keep].astype(np.float64)
     anchor = anchors[keep].astype(np.float64)
     scale = np.array([options.x_scale, options.y_scale])
@@ -148,11 +154,38 @@ def decode(regressors: np.ndarray, raw_scores: np.ndarray, anchors: np.ndarray,
     centers = raw[:, 0:2] / scale * size + anchor[:, 0:2]
     half = raw[:, 2:4] / np.array([options.w_scale, options.h_scale]) * size / 2
     boxes = np.concatenate([centers - half, centers + half], axis=1)
-    count = options.num_keypoints
     points = raw[:, 4:4 + 2 * count].reshape(len(keep), count, 2)
     keypoints = points / scale * size[:, None, :] + anchor[:, None, 0:2]
     return Detections(boxes.astype(np.float32), keypoints.astype(np.float32),
                       scores[keep].astype(np.float32))
+
+
+# How far (in logits) below the threshold's logit the best anchor must be for decode() to skip
+# the sigmoid of them all, and the highest threshold it does it for: there the sigmoid's
+# float64 rounding (1e-16) is far below what the margin changes a score by (over 1e-10).
+_LOGIT_MARGIN = 1e-6
+_SKIP_UP_TO = 0.999
+
+
+def _none_near(raw_scores: np.ndarray, options: DecodeOptions) -> bool:
+    """
+    Return True when no anchor can score min_score: the best logit is well below its logit.
+
+    The sigmoid keeps the logits' order (so does the clipping): the best anchor's logit
+    decides. One pass over the logits instead of their sigmoids; an anchor anywhere near the
+    threshold (or a NaN) leaves the decision to the sigmoids, as before.
+    """
+    threshold = options.min_score
+    if not len(raw_scores) or not 0.0 < threshold <= _SKIP_UP_TO:
+        return False
+    clip = options.score_clipping
+    best = min(max(float(raw_scores.max()), -clip), clip)
+    return best < math.log(threshold / (1.0 - threshold)) - _LOGIT_MARGIN
+
+
+def _no_detections(num_keypoints: int) -> Detections:
+    return Detections(np.empty((0, 4), np.float32), np.empty((0, num_keypoints, 2), np.float32),
+                      np.empty(0, np.float32))
 
 
 def iou(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
@@ -175,6 +208,8 @@ def weighted_nms(detections: Detections, threshold: float = 0.3,
     group becomes one detection with the score-weighted mean box and keypoints and the best
     one's score. Returns at most `limit` detections (0: all), best first.
     """
+    if not len(detections):
+        return _no_detections(detections.keypoints.shape[1])
     order = np.argsort(-detections.scores, kind='stable')
     boxes, keypoints, scores = [], [], []
     while len(order) and (not limit or len(scores) < limit):
@@ -231,6 +266,7 @@ class SsdDetector:
         self.nms_threshold = nms_threshold
         self.limit = limit
         self._anchors = ssd_anchors(AnchorOptions(spec.size, spec.size, spec.strides))
+        self._buffers = InputBuffers()  # the model's input, made in the same arrays each frame
         size = spec.size
         self._decoding = DecodeOptions(spec.num_keypoints, size, size, size, size, min_score)
 
@@ -248,7 +284,7 @@ class SsdDetector:
         """Return the frame's detections, best first: (box, score, keypoints) in frame pixels."""
         size = self.spec.size
         decoding = self._decoding
-        crop = letterbox(image_bgr, size, size, self.spec.value_range)
+        crop = letterbox(image_bgr, size, size, self.spec.value_range, self._buffers)
         results = self.model.run(crop.tensor)
         regressors, scores = (results[index] for index in self._outputs)
         found = weighted_nms(decode(regressors, scores, self._anchors, decoding),

@@ -42,7 +42,7 @@ import math
 from typing import List, Optional
 
 import numpy as np
-from py_vision.models.crops import rotated_crop
+from py_vision.models.crops import InputBuffers, rotated_crop
 from py_vision.models.files import shipped_model
 from py_vision.models.palm import enlarge, hand_region, HandRegion, MODEL_FILE as PALM_FILE
 from py_vision.models.palm import PalmDetector, upright_rotation
@@ -102,22 +102,24 @@ def landmark_region(landmarks: np.ndarray, scale: float = 2.0,
     of the index and ring ones) points up; the box around the palm's landmarks in that turned
     frame, `scale` times its longer side, moved `shift` times its height towards the fingers.
     """
-    points = np.asarray(landmarks, np.float64)[:, :2]
-    knuckles = ((points[_INDEX_MCP] + points[_RING_MCP]) / 2 + points[_MIDDLE_MCP]) / 2
+    # A dozen points: Python's float arithmetic (the same IEEE doubles, in the same order, as
+    # numpy's) costs less than as many numpy calls.
+    points = np.asarray(landmarks, np.float64)[:, :2].tolist()
+    (ix, iy), (mx, my), (rx, ry) = (points[_INDEX_MCP], points[_MIDDLE_MCP],
+                                    points[_RING_MCP])
+    knuckles = (((ix + rx) / 2 + mx) / 2, ((iy + ry) / 2 + my) / 2)
     rotation = upright_rotation(points[0], knuckles)
-    palm = points[_PALM]
-    middle = (palm.min(axis=0) + palm.max(axis=0)) / 2
+    xs, ys = [points[index][0] for index in _PALM], [points[index][1] for index in _PALM]
+    middle_x, middle_y = (min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2
     cos, sin = math.cos(rotation), math.sin(rotation)
     # The palm's points in the region's own axes (turned back by the rotation).
-    relative = palm - middle
-    turned = np.stack([relative[:, 0] * cos + relative[:, 1] * sin,
-                       -relative[:, 0] * sin + relative[:, 1] * cos], axis=1)
-    low, high = turned.min(axis=0), turned.max(axis=0)
-    cx, cy = (low + high) / 2
-    center = middle + np.array([cx * cos - cy * sin, cx * sin + cy * cos])
-    width, height = high - low
-    return enlarge(float(center[0]), float(center[1]), float(width), float(height), rotation,
-                   scale, shift)
+    relative = [(x - middle_x, y - middle_y) for x, y in zip(xs, ys)]
+    turned_x = [x * cos + y * sin for x, y in relative]
+    turned_y = [-x * sin + y * cos for x, y in relative]
+    low_x, low_y, high_x, high_y = min(turned_x), min(turned_y), max(turned_x), max(turned_y)
+    cx, cy = (low_x + high_x) / 2, (low_y + high_y) / 2
+    return enlarge(middle_x + (cx * cos - cy * sin), middle_y + (cx * sin + cy * cos),
+                   high_x - low_x, high_y - low_y, rotation, scale, shift)
 
 
 def _overlap(a: HandRegion, b: HandRegion) -> float:
@@ -145,6 +147,7 @@ class HandTracker:
         self.mirrored = mirrored
         self.track = track
         self._tracked: List[HandRegion] = []
+        self._buffers = InputBuffers()  # the landmark model's input, made in the same arrays
 
     @property
     def min_palm_score(self) -> float:
@@ -193,7 +196,7 @@ class HandTracker:
     def _landmarks(self, image_bgr: np.ndarray, region: HandRegion) -> Optional[Hand]:
         """Return the hand in the region, or None when the model sees none there."""
         crop = rotated_crop(image_bgr, (region.x, region.y), region.side, region.rotation,
-                            _SIZE, (0.0, 1.0))
+                            _SIZE, (0.0, 1.0), self._buffers)
         results = self.landmark_model.run(crop.tensor)
         points, presence, left = (results[index] for index in self._outputs)
         score = float(presence.reshape(-1)[0])

@@ -38,6 +38,10 @@ post-processing is the same for a float and a quantised model. A .tflite file's 
 point are its tensors' (per tensor; an input or output quantised per channel is refused); an
 .onnx file's are read by onnx_graph (its QDQ convention).
 
+Each run's model proper (the interpreter's invoke, the session's run, the network's forward
+pass) is timed for the thread that runs it (`model_time`): vision_step splits a frame's time
+into its models' and the rest with it.
+
 `find_outputs` checks that a model is the one a step expects and finds the outputs it reads by
 their names, in whatever order the file lists them (by position where the names are unknown).
 
@@ -55,6 +59,7 @@ import sys
 from typing import Callable, Dict, List, Optional, Protocol, Sequence, Tuple
 
 import numpy as np
+from py_vision.models.model_time import timing
 from py_vision.models.onnx_graph import OnnxFormatError, read_signature, without_edge_quantization
 
 __all__ = ['dequantize', 'find_outputs', 'load', 'Model', 'ModelError', 'quantize', 'RUNTIMES',
@@ -241,8 +246,11 @@ class _TfliteModel(RuntimeModel):
     def _invoke(self, arrays: List[np.ndarray]) -> List[np.ndarray]:
         for detail, array in zip(self._input_details, arrays):
             self._interpreter.set_tensor(detail['index'], array)
-        self._interpreter.invoke()
-        return [self._interpreter.get_tensor(detail['index']).copy()
+        with timing():
+            self._interpreter.invoke()
+        # get_tensor returns a copy of its own (LiteRT and tflite_runtime alike): not copied
+        # again (the palm detector's 150 kB a frame).
+        return [self._interpreter.get_tensor(detail['index'])
                 for detail in self._output_details]
 
 
@@ -294,7 +302,8 @@ class _OnnxruntimeModel(RuntimeModel):
 
     def _invoke(self, arrays: List[np.ndarray]) -> List[np.ndarray]:
         feed = {info.name: array for info, array in zip(self.inputs, arrays)}
-        return list(self._session.run([info.name for info in self.outputs], feed))
+        with timing():
+            return list(self._session.run([info.name for info in self.outputs], feed))
 
 
 class _OpencvModel(RuntimeModel):
@@ -334,8 +343,9 @@ class _OpencvModel(RuntimeModel):
             else:
                 self._net.setInput(array, info.name)
         try:
-            results = self._net.forward([self._renamed.get(info.name, info.name)
-                                         for info in self.outputs])
+            with timing():
+                results = self._net.forward([self._renamed.get(info.name, info.name)
+                                             for info in self.outputs])
         except self._error as error:
             raise ModelError('%s: OpenCV DNN cannot run it: %s'
                              % (self.path, _one_line(error))) from None

@@ -49,7 +49,7 @@ rests against the index finger is 'unknown' (spread the thumb).
 """
 
 import math
-from typing import Optional
+from typing import Optional, Sequence
 
 import numpy as np
 
@@ -73,21 +73,23 @@ _DIRECTION = math.radians(35)  # how far from exact a pointing direction may be
 STRETCHED, FOLDED = 'stretched', 'folded'
 
 
-def _bend(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:
+def _bend(a: Sequence[float], b: Sequence[float], c: Sequence[float]) -> float:
     """Return the angle at b between a -> b and b -> c: 0 when a, b, c are in line."""
-    first, second = b - a, c - b
-    norms = np.linalg.norm(first) * np.linalg.norm(second)
+    first = [q - p for p, q in zip(a, b)]
+    second = [q - p for p, q in zip(b, c)]
+    norms = math.hypot(*first) * math.hypot(*second)
     if norms == 0:
         return math.pi
-    return math.acos(float(np.clip(np.dot(first, second) / norms, -1.0, 1.0)))
+    cosine = sum(x * y for x, y in zip(first, second)) / norms
+    return math.acos(max(-1.0, min(1.0, cosine)))
 
 
-def finger_state(points: np.ndarray, joints) -> Optional[str]:
+def finger_state(points: Sequence[Sequence[float]], joints) -> Optional[str]:
     """Return STRETCHED, FOLDED or None (neither) for a finger's (mcp, pip, dip, tip)."""
     mcp, pip, dip, tip = (points[index] for index in joints)
     wrist = points[_WRIST]
-    tip_reach = np.linalg.norm(tip - wrist)
-    pip_reach = np.linalg.norm(pip - wrist)
+    tip_reach = math.dist(tip, wrist)
+    pip_reach = math.dist(pip, wrist)
     if tip_reach < pip_reach:
         return FOLDED
     bends = _bend(wrist, mcp, pip) + _bend(mcp, pip, dip) + _bend(pip, dip, tip)
@@ -96,19 +98,19 @@ def finger_state(points: np.ndarray, joints) -> Optional[str]:
     return None
 
 
-def thumb_out(points: np.ndarray, size: float) -> bool:
+def thumb_out(points: Sequence[Sequence[float]], size: float) -> bool:
     """Return whether the thumb sticks out: nearly straight, its tip away from the fingers."""
     cmc, mcp, ip, tip = (points[index] for index in _THUMB)
     straight = max(_bend(mcp, ip, tip), _bend(cmc, mcp, tip)) < _THUMB_STRAIGHT
-    nearest = np.min(np.linalg.norm(points[_NEAR_THUMB] - tip, axis=1))
+    nearest = min(math.dist(points[index], tip) for index in _NEAR_THUMB)
     return straight and nearest > _THUMB_OUT * size
 
 
-def _direction(start: np.ndarray, end: np.ndarray) -> Optional[str]:
+def _direction(start: Sequence[float], end: Sequence[float]) -> Optional[str]:
     """Return 'left', 'right', 'up' or 'down' in the picture, or None (between, or edge-on)."""
-    dx, dy = float(end[0] - start[0]), float(end[1] - start[1])
+    dx, dy = end[0] - start[0], end[1] - start[1]
     length = math.hypot(dx, dy)
-    if length == 0 or length < 0.5 * float(np.linalg.norm(end - start)):
+    if length == 0 or length < 0.5 * math.dist(end, start):
         return None  # mostly towards or away from the camera
     for name, (ux, uy) in (('right', (1, 0)), ('left', (-1, 0)), ('up', (0, -1)),
                            ('down', (0, 1))):
@@ -131,7 +133,10 @@ def classify(landmarks: np.ndarray, handedness: str) -> str:
                          % (points.shape,))
     if handedness not in HANDEDNESS:
         raise ValueError("handedness must be 'left' or 'right', not %r" % (handedness,))
-    size = float(np.linalg.norm(points[_MIDDLE_MCP] - points[_WRIST]))
+    # 21 points of plain floats: a few dozen small computations cost less in Python's math
+    # than as many numpy calls.
+    points = points.tolist()
+    size = math.dist(points[_MIDDLE_MCP], points[_WRIST])
     if size == 0:
         return 'unknown'
     states = [finger_state(points, joints) for joints in _FINGERS]

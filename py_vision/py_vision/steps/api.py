@@ -48,15 +48,22 @@ timers (StepContext.create_timer) and the subscriptions' callbacks
 (StepContext.create_subscription) run on the executor's; stopping() and close() on the
 thread that stops the node. A process() that raises is logged
 and counted, frame_failed() is called, and the next frame is tried.
+
+Time inside models: the runtimes of py_vision.models time each model run on the thread that
+runs it (py_vision.models.model_time); `models_clock()` is that thread's total, which
+vision_step reads around each frame to split its processing time into the models' and the
+rest. A step running a model some other way counts it with `model_time.timing()`.
 """
 
 from dataclasses import dataclass
 from typing import Any, Callable, ClassVar, Dict, Optional, Protocol, Sequence, Tuple
 
 import numpy as np
+from py_vision.models.model_time import thread_model_time
 from py_vision.params import Spec
 
-__all__ = ['DELIVERY_TIMEOUT_S', 'ProcessesFrames', 'Step', 'StepContext', 'STOP_GRACE_S']
+__all__ = ['DELIVERY_TIMEOUT_S', 'models_clock', 'ProcessesFrames', 'Step', 'StepContext',
+           'STOP_GRACE_S']
 
 
 class ProcessesFrames(Protocol):
@@ -71,6 +78,12 @@ def shipped_model_path(name: str) -> str:
     """Return the path of a model shipped in py_vision's share folder (ModelError: missing)."""
     from py_vision.models.files import shipped_model  # the models only when a step asks
     return shipped_model(name)
+
+
+def models_clock() -> Tuple[float, float]:
+    """Return the seconds the calling thread has spent inside models so far: (wall, CPU)."""
+    total = thread_model_time()
+    return total.seconds, total.cpu_seconds
 
 
 # How long the node waits at stop for process() to return before it abandons it, and then for
@@ -107,6 +120,9 @@ class StepContext:
     # How the node makes the step's publishers (vision_step: ones whose messages from an
     # abandoned process() are dropped, and whose last messages are waited for at stop).
     publisher_factory: Callable[..., Any] = _own_publisher
+    # True while what process() returns goes anywhere (its image topic has a subscriber, or
+    # the node shows it): a step may leave out drawing on the image while it is False.
+    output_wanted: Callable[[], bool] = lambda: True
 
     def create_publisher(self, msg_type, topic: str, depth: int = 10):
         """Create a publisher of the node (reliable, keep-last depth)."""

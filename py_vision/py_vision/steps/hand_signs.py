@@ -19,14 +19,15 @@ Read as four steps: detect a hand and its 21 landmarks (MediaPipe's palm detecto
 landmark model, py_vision.models.hands), classify the landmarks into one of a handful of signs
 (py_vision.models.signs: not a sign language, a few gestures), act (the sign's motion as a
 geometry_msgs/Twist, or TwistStamped stamped when sent, and the sign as std_msgs/String on
-`hand_sign`), and draw the landmarks and the sign on the image. The commands go through a
-CommandGate (steps/commands.py), which makes them fail safe: a sign moves the robot once held
-`hold_frames` frames over `hold_time` seconds, a change of sign stops it first; no hand, a hand
-scoring below `min_drive_score` and `open_hand` stop it at once; a frame older than
-`max_frame_age` stops it; speeds are capped and ramped for the base; with `enable_topic` the
-robot moves only while an enable input says so; and a zero command goes out (a few copies, then
-quiet) when no frame was processed for `command_timeout` seconds (the gate's own watchdog
-thread), when the step fails on a frame, when the enable lapses and when the node stops.
+`hand_sign`), and draw the landmarks and the sign on the image (while it is published or shown:
+StepContext.output_wanted). The commands go through a CommandGate (steps/commands.py), which
+makes them fail safe: a sign moves the robot once held `hold_frames` frames over `hold_time`
+seconds, a change of sign stops it first; no hand, a hand scoring below `min_drive_score` and
+`open_hand` stop it at once; a frame older than `max_frame_age` stops it; speeds are capped and
+ramped for the base; with `enable_topic` the robot moves only while an enable input says so;
+and a zero command goes out (a few copies, then quiet) when no frame was processed for
+`command_timeout` seconds (the gate's own watchdog thread), when the step fails on a frame,
+when the enable lapses and when the node stops.
 """
 
 import time
@@ -100,7 +101,9 @@ def twist_of(velocity: Velocity) -> Twist:
 def draw(image: np.ndarray, hand: Optional[Hand], sign: str, drives: bool = True) -> None:
     """Draw the hand, its sign and whether it drives (`drives`) on image, in place."""
     if hand is not None:
-        points = [tuple(int(round(v)) for v in point[:2]) for point in hand.landmarks]
+        # Rounded half to even, as round() does.
+        pixels = np.rint(np.asarray(hand.landmarks)[:, :2]).astype(int)
+        points = [tuple(point) for point in pixels.tolist()]
         for a, b in BONES:
             cv2.line(image, points[a], points[b], BONE_BGR, 2, cv2.LINE_AA)
         for point in points:
@@ -191,6 +194,7 @@ class HandSigns(Step):
         self.gate: Optional[CommandGate] = None
         self.watchdog: Optional[Watchdog] = None
         self._frame_age: Callable[[], Optional[float]] = lambda: None
+        self._output_wanted: Callable[[], bool] = lambda: True
         self._now: Callable[[], Any] = lambda: None
         self._stops: Optional[ThrottledLog] = None  # the gate's own zeros, logged
         # The gate's clock and sleep (monotonic; a test's fake clock, set before start()).
@@ -211,6 +215,7 @@ class HandSigns(Step):
         self.twists = context.create_publisher(TwistStamped if stamped else Twist,
                                                self.settings['cmd_vel_topic'])
         self._frame_age = context.frame_age
+        self._output_wanted = context.output_wanted
         self._now = context.node.get_clock().now
         self._stops = ThrottledLog(context.logger, STOP_LOG_PERIOD_S) if context.logger else None
         self.gate = CommandGate(self._send, gate_settings(self.settings), self.clock, self.sleep)
@@ -250,7 +255,8 @@ class HandSigns(Step):
                         motion(sign if drives else NO_HAND, self.settings['linear_speed'],
                                self.settings['angular_speed']),
                         self._frame_age())
-        draw(image, best, sign, drives)
+        if self._output_wanted():  # nobody watching: no drawing
+            draw(image, best, sign, drives)
         return image
 
     def frame_failed(self, header: Any, error: Exception) -> None:

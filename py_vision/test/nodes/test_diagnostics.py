@@ -158,6 +158,11 @@ def test_cv_bridge_test_warns_when_it_cannot_keep_up(launch, peer):
     ok, values = monitor.wait_for(name, OK, lambda v: v['processing p50 ms'] != '')
     assert 'keeping up' in ok.message
     assert float(values['output age p50 ms']) >= float(values['processing p50 ms'])
+    # Its step runs no model: all of a frame's time is the rest.
+    assert 'no model ran' in ok.message, ok.message
+    assert (values['models p50 ms'], values['frames running models']) == ('0.0', '0'), values
+    assert values['rest p50 ms'] == values['processing p50 ms'], values
+    assert values['models CPU ms'] == '0', values
     # 300 ms a frame at 10 fps: two frames of three are skipped.
     assert set_parameter(peer, 'cv_bridge_test', 'simulated_work_ms', 300.0).successful
     warn, values = monitor.wait_for(name, WARN)

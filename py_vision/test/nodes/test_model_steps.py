@@ -17,7 +17,9 @@ The built-in model steps in the installed vision_step: hand_signs and faces.
 
 hand_signs on the synthetic camera (no hand in it): every Twist all zero and `hand_sign` saying
 so, seen by a subscriber of its own; on a real photograph of an open hand (photos.hand_photo):
-`open_hand`, the turtle told to stand still, the hand drawn. faces on a real photograph
+`open_hand`, the turtle told to stand still, the hand drawn; its statistics line and
+/diagnostics splitting a frame's processing time into its models' and the rest. faces on a
+real photograph
 (scikit-image's astronaut): the face where it is, in vision_msgs where installed, else in the
 JSON fallback.
 """
@@ -26,11 +28,12 @@ import json
 import re
 import signal
 
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist
 import numpy as np
 import photos
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from ros_harness import wait_until
+from ros_harness import status_values, wait_until
 from sensor_msgs.msg import Image
 from std_msgs.msg import String
 
@@ -98,6 +101,46 @@ def test_hand_signs_sees_the_open_hand_in_a_photograph(launch, peer):
     drawn = np.frombuffer(bytes(images[0].data), np.uint8).reshape(hand.shape)
     assert images[0].header.frame_id == 'hand'
     assert (drawn != hand).any(axis=2).sum() > 2000
+    assert node.stop(signal.SIGINT) == 0
+    assert 'Traceback' not in node.output()
+
+
+# The statistics line's processing time and its split: (processing p50, models p50, rest p50).
+SPLIT_LINE = re.compile(r'processing p50 ([\d.]+) ms p99 [\d.]+ ms '
+                        r'\(p50: models ([\d.]+) ms, rest ([\d.]+) ms\)')
+
+
+def test_hand_signs_splits_its_processing_time_into_the_models_and_the_rest(launch, peer):
+    arrays = peer.collect(DiagnosticArray, '/diagnostics', RELIABLE)
+    node = launch('vision_step', params={'step': 'hand_signs'})
+    node.wait_for_output(r'running step hand_signs', timeout=60.0)
+    publisher = peer.node.create_publisher(Image, 'usb_camera/image', RELIABLE)
+    msg = photo_message(photos.hand_photo(), 'hand')
+
+    def sent_and(found):
+        def check():
+            msg.header.stamp.sec += 1
+            publisher.publish(msg)
+            return found()
+        return check
+
+    def split_reported():
+        values = status_values(arrays, 'vision_step: processing')
+        return values if values.get('models p50 ms') not in (None, '', '0.0') else None
+    values = wait_until(sent_and(split_reported), 30.0, interval=0.5,
+                        what='/diagnostics with the models time of a frame')
+    processing, models, rest = (float(values[key]) for key in (
+        'processing p50 ms', 'models p50 ms', 'rest p50 ms'))
+    # The palm detector and the landmark model ran in each frame: part of its time, not more.
+    assert 0 < models <= processing, values
+    assert 0 <= rest <= processing, values
+    assert float(values['models p99 ms']) <= float(values['processing p99 ms']), values
+    assert int(values['frames running models']) >= 1, values
+    # Since start, the worker's CPU time in processing, and of it in models.
+    assert 0 < int(values['models CPU ms']) <= int(values['processing CPU ms']), values
+    line = wait_until(sent_and(lambda: SPLIT_LINE.search(node.output())), 30.0, interval=0.5,
+                      what='the statistics line with the split:\n%s' % node.output())
+    assert 0 < float(line.group(2)) <= float(line.group(1)), line.group(0)
     assert node.stop(signal.SIGINT) == 0
     assert 'Traceback' not in node.output()
 

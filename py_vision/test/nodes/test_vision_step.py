@@ -79,6 +79,16 @@ class Failing(Step):
         return image
 
 
+class OwnModel(Step):
+    # A model run by the user's own runtime, counted as one with model_time.timing().
+    def process(self, image, header):
+        import time
+        from py_vision.models.model_time import timing
+        with timing():
+            time.sleep(0.05)
+        return image
+
+
 class NotAStep:
     pass
 
@@ -193,6 +203,25 @@ def test_the_smallest_step_is_any_class_with_process(launch, peer, user_env):
     image = np.random.default_rng(2).integers(0, 256, (64, 80, 3), np.uint8)
     probe.send(image, 1)
     assert (as_bgr(probe.result_for(1)) == image[:, ::-1]).all()
+    assert node.stop(signal.SIGINT) == 0
+
+
+def test_a_users_own_model_timed_with_model_time_shows_as_the_models_time(
+        launch, peer, user_env):
+    arrays = peer.collect(DiagnosticArray, '/diagnostics', RELIABLE)
+    node = launch('vision_step', params={'step': 'user_steps:OwnModel'}, env=user_env)
+    probe = Probe(peer)
+    probe.wait_connected()
+    image = np.zeros((48, 64, 3), np.uint8)
+
+    def split_reported():
+        probe.send(image, 1)
+        values = status_values(arrays, PROCESSING)
+        return values if values.get('models p50 ms') not in (None, '', '0.0') else None
+    values = wait_until(split_reported, 30.0, interval=0.2, what='the models time reported')
+    assert float(values['models p50 ms']) >= 50.0, values
+    assert float(values['rest p50 ms']) < float(values['models p50 ms']), values
+    assert float(values['processing p50 ms']) >= float(values['models p50 ms']), values
     assert node.stop(signal.SIGINT) == 0
 
 

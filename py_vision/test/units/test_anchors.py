@@ -94,6 +94,48 @@ def test_decode_keeps_only_scores_over_the_threshold_and_clips_huge_logits():
     assert len(nothing) == 0 and nothing.keypoints.shape == (0, 6, 2)
 
 
+def sigmoid_keeps(raw_scores, options):
+    """Return the anchors decode keeps, as the sigmoid of every clipped logit says."""
+    logits = np.clip(raw_scores.reshape(-1), -options.score_clipping, options.score_clipping)
+    return np.flatnonzero(1.0 / (1.0 + np.exp(-logits.astype(np.float64))) >= options.min_score)
+
+
+def test_decode_finds_what_the_sigmoid_of_every_anchor_finds_near_the_threshold():
+    # decode() skips the sigmoids when the best logit is well below the threshold's: the
+    # same anchors either way, also with the best anchor a hair from the threshold.
+    anchors = ssd_anchors(FACE)
+    rng = np.random.default_rng(44)
+    regressors = rng.normal(0, 5, (1, 896, 16)).astype(np.float32)
+    skipped = 0
+    for trial in range(3000):
+        min_score = float(rng.choice([rng.uniform(0.01, 0.99), 0.5, 0.999, 0.9995, 1.0,
+                                      1e-300, 0.0]))
+        options = DecodeOptions(6, 128, 128, 128, 128, min_score=min_score,
+                                score_clipping=float(rng.choice([100.0, 3.0])))
+        scores = rng.normal(-8, 3, (1, 896, 1)).astype(np.float32)
+        if 0 < min_score < 1:
+            # The best anchor a few float32 steps from the threshold's logit, or a few units.
+            best = np.float32(np.log(min_score / (1 - min_score)))
+            if trial % 2:
+                towards = np.float32(rng.choice([-np.inf, np.inf]))
+                for _ in range(rng.integers(0, 4)):
+                    best = np.nextafter(best, towards)
+            else:
+                best = np.float32(best + rng.uniform(-3, 3))
+            scores[0, rng.integers(896), 0] = best
+        keep = sigmoid_keeps(scores, options)
+        found = decode(regressors, scores, anchors, options)
+        skipped += not len(keep)
+        assert len(found) == len(keep), (min_score, options.score_clipping)
+        if len(keep):
+            assert found.scores.tolist() == (1 / (1 + np.exp(-np.clip(
+                scores.reshape(-1)[keep], -options.score_clipping, options.score_clipping
+            ).astype(np.float64)))).astype(np.float32).tolist()
+    assert 500 < skipped < 2500  # both ways were tried
+    nan = np.full((1, 896, 1), np.nan, np.float32)
+    assert len(decode(regressors, nan, anchors, DecodeOptions(6, 128, 128, 128, 128))) == 0
+
+
 def test_decode_refuses_too_few_values_per_anchor():
     with pytest.raises(ValueError, match='regressors have 16 values per anchor, the options '
                                          'want 18'):

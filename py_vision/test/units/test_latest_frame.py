@@ -94,12 +94,15 @@ def test_statistics_give_counts_and_percentiles_of_the_recent_window(closing):
 
     def step(duration):
         clock.t += duration
-    worker = LatestFrameWorker(step, window_s=100.0, clock=clock)
+    worker = LatestFrameWorker(step, window_s=100.0, clock=clock, cpu_clock=clock)
     closing(worker)
     empty = worker.snapshot()
     assert empty == {'frames_in': 0, 'processed': 0, 'skipped': 0,
                      'processing_ms_p50': None, 'processing_ms_p99': None,
-                     'age_ms_p50': None, 'age_ms_p99': None}
+                     'age_ms_p50': None, 'age_ms_p99': None,
+                     'part_ms_p50': None, 'part_ms_p99': None,
+                     'rest_ms_p50': None, 'rest_ms_p99': None, 'part_items': 0,
+                     'cpu_ms': 0, 'part_cpu_ms': 0}
     for count, duration in enumerate(durations, start=1):
         worker.offer(duration)
         wait_until(lambda: worker.processed == count, TIMEOUT, interval=0.001,
@@ -117,6 +120,51 @@ def test_statistics_give_counts_and_percentiles_of_the_recent_window(closing):
     later = worker.snapshot()
     assert later['processing_ms_p50'] is None and later['age_ms_p99'] is None
     assert later['processed'] == 100
+    # Without a part clock nothing is split. The steps' CPU time (here: the fake clock's
+    # time, their thread using all of it) is added up since start: 10 ms .. 1000 ms, 50.5 s.
+    assert snap['part_ms_p50'] is None and snap['rest_ms_p50'] is None
+    assert snap['part_items'] == 0 and snap['part_cpu_ms'] == 0
+    assert later['cpu_ms'] == 50500
+
+
+def test_a_part_clock_splits_each_items_time_into_that_part_and_the_rest(closing):
+    # part: the seconds inside models, say; its CPU time a quarter of its wall time (a model
+    # run that waits for a core most of the time), the step's own work all CPU.
+    clock, part, cpu = FakeClock(), FakeClock(0.0), FakeClock(0.0)
+
+    def step(inside_s):
+        clock.t += 0.003  # 3 ms of the step's own work, every item
+        cpu.t += 0.003
+        clock.t += inside_s
+        part.t += inside_s
+        cpu.t += inside_s / 4
+        if inside_s > 0.085:
+            raise ValueError('a step that fails after its model ran')
+    worker = LatestFrameWorker(step, window_s=100.0, clock=clock, cpu_clock=cpu,
+                               part_clock=lambda: (part.t, part.t / 4),
+                               on_error=lambda error: None)
+    closing(worker)
+    # 90 items with 1 .. 90 ms inside the part, 10 with none (a frame no model ran on).
+    parts = [ms / 1e3 for ms in range(1, 91)] + [0.0] * 10
+    for count, inside in enumerate(parts, start=1):
+        worker.offer(inside)
+        wait_until(lambda: worker.processed == count, TIMEOUT, interval=0.001,
+                   what='step %d' % count)
+    snap = worker.snapshot()
+    # Sorted, the parts are 10 zeros then 1 .. 90 ms: the 50th is 40 ms, the 99th 89 ms.
+    assert snap['part_ms_p50'] == pytest.approx(40.0)
+    assert snap['part_ms_p99'] == pytest.approx(89.0)
+    assert snap['rest_ms_p50'] == pytest.approx(3.0) and snap['rest_ms_p99'] == pytest.approx(3.0)
+    assert snap['processing_ms_p50'] == pytest.approx(43.0)
+    assert snap['part_items'] == 90
+    # CPU since start: 1 + 2 + .. + 90 ms in the part, a quarter of it (1023.75 ms); 3 ms
+    # more an item in all.
+    assert snap['part_cpu_ms'] == 1024
+    assert snap['cpu_ms'] == 1324
+    clock.t += 100.1
+    later = worker.snapshot()
+    assert later['part_ms_p50'] is None and later['rest_ms_p99'] is None
+    assert later['part_items'] == 0
 
 
 def test_a_step_that_raises_is_reported_and_the_worker_goes_on():

@@ -92,6 +92,10 @@ def test_tflite_runtime_loads_and_runs_the_face_model(runtime):
     assert np.all(np.isfinite(regressors))
     # A grey picture has no face: every anchor's logit says so.
     assert scores.max() < 0
+    # A run's outputs are the caller's: the next run (another picture) leaves them as they were.
+    kept = [output.copy() for output in (regressors, scores)]
+    model.run(np.ones((1, 128, 128, 3), np.float32))
+    assert all(np.array_equal(output, copy) for output, copy in zip((regressors, scores), kept))
 
 
 @pytest.mark.parametrize('runtime', ['litert', 'tflite_runtime'])

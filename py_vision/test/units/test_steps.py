@@ -169,12 +169,13 @@ class SignsUnderTest:
         self.node = FakeNode()
         self.step = HandSigns()
         self.age = frame_age
+        self.watched = True  # whether the step's output image is published or shown
         parameters = dict({'stop_repeats': 1, 'hold_time': 0.0}, **parameters)
         self.clock = self.step.clock = FakeClock()
         self.step.sleep = self.clock.sleep
         self.note = self.step.start(StepContext(
             node=self.node, logger=None, parameters=defaults(HandSigns, **parameters),
-            frame_age=lambda: self.age()))
+            frame_age=lambda: self.age(), output_wanted=lambda: self.watched))
         self.step.tracker = FakeTracker()
         self.signs = self.node.publishers['hand_sign']
         self.twists = self.node.publishers[self.step.settings['cmd_vel_topic']]
@@ -223,6 +224,18 @@ def test_hand_signs_publishes_the_sign_and_its_twist_and_zero_below_min_score():
     test.step.parameters_changed({'min_score': 0.8})
     assert (tracker.min_hand_score, tracker.min_palm_score) == (0.8, 0.5)
     assert isinstance(test.twists.sent[0], Twist)
+
+
+def test_hand_signs_draws_only_while_its_image_is_published_or_shown():
+    test = SignsUnderTest(hold_frames=1)
+    test.watched = False
+    sign, moving, out = test.frame([THUMB_UP])
+    # Nobody watching: the same sign and command, the image left as it came.
+    assert (sign, moving) == ('thumb_up', (1.0, 0.0))
+    assert not out.any()
+    test.watched = True
+    assert (test.frame([THUMB_UP])[2] != 0).any(axis=2).sum() > 500
+    assert (test.frame([])[2] != 0).any(axis=2).sum() > 100  # the sign: no_hand
 
 
 def test_hand_signs_moves_only_on_a_held_sign_and_a_flicker_stops_it():
