@@ -194,3 +194,21 @@ def stopped_after(domain, peer, node, *others):
         domain.release()
     if any(ended.status) or 'Traceback' in ended.log:
         raise SystemExit('%s ended with %s:\n%s' % (node.name, ended.status, ended.log))
+
+
+# vision_step's status in /diagnostics, and how long a fresh report may take (one a second).
+PROCESSING = 'vision_step: processing'
+REPORT_S = 10.0
+
+
+def processing_values(arrays):
+    """Return the newest {key: value} of vision_step's processing status, or {}."""
+    return ros_harness.status_values(arrays, PROCESSING)
+
+
+def fresh_report(arrays):
+    """Wait for a /diagnostics report newer than those collected; return its values."""
+    count = len(arrays)
+    ros_harness.wait_until(lambda: len(arrays) > count and processing_values(arrays),
+                           REPORT_S, 0.01, 'a /diagnostics report')
+    return processing_values(arrays)

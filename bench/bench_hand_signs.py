@@ -39,8 +39,11 @@ per frame, counted by a subscriber of this process), the step the frames it proc
 hand_sign, one per processed frame; the circle step's: the frames the viewer got), the viewer
 the frames it received (its /stats, `viewer_frames`); the bare nodes' from their own records.
 Medians over --rounds rounds, the cases interleaved.
-Prints a Markdown table with the machine's load average, and an estimate for a Cortex-A53
-(this machine's CPU per frame times 10 and 20, docs/benchmarks.md), and writes
+The step's /diagnostics says how much of its CPU went into its models ('models CPU ms'): a
+processed frame's CPU is split into the models' and the rest. Prints a Markdown table with the
+machine's load average, and an estimate for a Cortex-A53 with a factor for each kind of work
+(docs/benchmarks.md: the models' convolutions 16 to 20 times this machine's time, everything
+else, Python, copies and OpenCV, 10 to 15), and writes
 bench/results/hand_signs-py<version>.json (the boards' Python 3.10 in the board-version
 environment: `. scripts/board_env.sh && python bench/bench_hand_signs.py`).
 """
@@ -59,8 +62,9 @@ import threading
 import time
 import urllib.request
 
-from bench_common import (BENCH, CLK_TCK, cpu_ticks, FIRST_FRAME_MARK, local_node_env,
-                          machine_ticks, read_results, save_results, start_helper)
+from bench_common import (BENCH, CLK_TCK, cpu_ticks, FIRST_FRAME_MARK, fresh_report,
+                          local_node_env, machine_ticks, read_results, save_results,
+                          start_helper)
 import ros_harness
 
 SIZES = '640x480,320x240'
@@ -71,7 +75,10 @@ CASES = ('bare', 'circle', 'no hand', 'hand')
 HAND_PHOTO_INSTALLED = '/usr/share/doc/opencv-doc/opencv4/html/handSrc.jpg'
 # The clip: the photograph moved along a closed path (so that the loop has no jump), 2 s long.
 CLIP_FRAMES, CLIP_FPS, DRIFT_PX = 60, 30.0, (16.0, 8.0)
-A53_FACTORS = (10.0, 20.0)
+# Cortex-A53 time over this machine's, low and high (docs/benchmarks.md, On a Cortex-A53): the
+# models' float convolutions; the rest of the work (Python, frame copies, OpenCV).
+A53_MODELS = (16.0, 20.0)
+A53_OTHER = (10.0, 15.0)
 STATS_LINE = re.compile(r'frames in \d+, processed \d+.*processing p50 ([\d.]+) ms')
 VIEWER_URL = re.compile(r'browser viewer at (http://127\.0\.0\.1:\d+/)')
 
@@ -241,6 +248,8 @@ def measure_reference(size, fps, window, env, workdir):
 
 def measure_pipeline(case, size, fps, window, threads, env, clip):
     """Run the three nodes of hand_signs.launch.py at size and fps; return their figures."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import CameraInfo
     from std_msgs.msg import String
     domain = ros_harness.DomainId()
@@ -249,6 +258,8 @@ def measure_pipeline(case, size, fps, window, threads, env, clip):
     peer = ros_harness.RosPeer(domain.value, name='bench_hand_signs')
     infos = Arrivals(peer, CameraInfo, 'usb_camera/camera_info')
     signs = Arrivals(peer, String, 'hand_sign')
+    arrays = peer.collect(DiagnosticArray, '/diagnostics', QoSProfile(
+        depth=100, reliability=ReliabilityPolicy.RELIABLE))
     processes, client = [], None
     try:
         processes.append(ros_harness.NodeProcess('usbcam_publisher', ros_harness.ros_args({
@@ -267,9 +278,12 @@ def measure_pipeline(case, size, fps, window, threads, env, clip):
             lambda: client.parts >= 3 and (signs.records or case == 'circle'), START_S, 0.05,
             'the first frames through the viewer')
         time.sleep(SETTLE_S)
+        # The step's own count of its models' CPU, from a report at each end of the window.
+        report_before = fresh_report(arrays)
         shown_before = viewer_frames(url)
         measured = Window(processes, window)
         shown = viewer_frames(url) - shown_before
+        report_after = fresh_report(arrays)
         # The step's statistics line comes every 5 s: the last one covers the window's end.
         processes[1].wait_for_output(STATS_LINE.pattern, 10.0)
         processing = float(STATS_LINE.findall(processes[1].output())[-1])
@@ -287,13 +301,24 @@ def measure_pipeline(case, size, fps, window, threads, env, clip):
     step = node_figures(measured.ticks['step'], shown if case == 'circle' else len(window_signs),
                         measured.seconds)
     step.update(processing_ms_p50=processing,
-                signs={sign: window_signs.count(sign) for sign in sorted(set(window_signs))})
+                signs={sign: window_signs.count(sign) for sign in sorted(set(window_signs))},
+                models_cpu_ms_per_frame=models_per_frame(report_before, report_after))
     return measured, {
         'camera': node_figures(measured.ticks['camera'],
                                len(infos.between(measured.start, measured.end)),
                                measured.seconds),
         'step': step,
         'viewer': node_figures(measured.ticks['viewer'], shown, measured.seconds)}
+
+
+def models_per_frame(before, after):
+    """Return the models' CPU a processed frame between two reports of the step, or None."""
+    try:
+        frames = int(after['processed']) - int(before['processed'])
+        models = float(after['models CPU ms']) - float(before['models CPU ms'])
+    except (KeyError, ValueError):
+        return None
+    return round(models / frames, 3) if frames > 0 else None
 
 
 def median_of(runs, key):
@@ -323,6 +348,8 @@ def summarise(results):
                            'cpu_percent': median_of(figures, 'cpu_percent')}
                     if node == 'step' and case != 'bare':
                         row['processing_ms_p50'] = median_of(figures, 'processing_ms_p50')
+                        row['models_cpu_ms_per_frame'] = median_of(figures,
+                                                                   'models_cpu_ms_per_frame')
                         row['signs'] = [f['signs'] for f in figures]
                     if case == 'bare':
                         bare[node] = row['cpu_ms_per_frame']
@@ -361,18 +388,22 @@ def a53_estimate(rows):
     for size, fps, case in sorted({(r['size'], r['fps'], r['case']) for r in rows
                                    if r['case'] not in ('bare', 'circle')},
                                   key=lambda k: (-int(k[0].split('x')[0]), k[1], k[2])):
-        nodes = {r['node']: r['cpu_ms_per_frame'] for r in rows
-                 if (r['size'], r['fps'], r['case']) == (size, fps, case)}
+        mine = [r for r in rows if (r['size'], r['fps'], r['case']) == (size, fps, case)]
+        nodes = {r['node']: r['cpu_ms_per_frame'] for r in mine}
+        models = next((r.get('models_cpu_ms_per_frame') or 0.0 for r in mine
+                       if r['node'] == 'step'), 0.0)
         # Receiving a frame: the bare subscriber's time a frame at that size and rate.
         nodes['receive'] = next((r['cpu_ms_per_frame'] for r in rows if (
             r['size'], r['fps'], r['case'], r['node']) == (size, fps, 'bare', 'step')), 0.0)
         if not all(nodes.get(n) for n in ('camera', 'step', 'viewer')):
             continue
-        line = {'size': size, 'fps': fps, 'case': case}
-        for factor in A53_FACTORS:
-            ms = {node: (value or 0.0) * factor for node, value in nodes.items()}
+        line = {'size': size, 'fps': fps, 'case': case, 'models_ms': models}
+        for bound, to_models, to_other in zip(('low', 'high'), A53_MODELS, A53_OTHER):
+            ms = {node: (value or 0.0) * to_other for node, value in nodes.items()}
+            # The step: its models' share at the convolutions' factor, the rest at the other.
+            ms['step'] = (nodes['step'] - models) * to_other + models * to_models
             times = (ms['camera'], ms['step'], ms['receive'], ms['viewer'], fps)
-            line['x%g' % factor] = {
+            line[bound] = {
                 'camera_cores': round(ms['camera'] * fps / 1000.0, 2),
                 'step_ms_per_frame': round(ms['step'], 1),
                 'viewer_ms_per_frame': round(ms['viewer'], 1),
@@ -388,24 +419,26 @@ NODE_NAMES = {('bare', 'camera'): 'bare publisher', ('bare', 'step'): 'bare subs
 
 
 def print_tables(rows, estimate, loads):
-    print('\n| size | rate | case | node | frames/s handled | CPU per frame | % of one core '
-          '| x bare | step processing p50 |')
-    print('|---|---:|---|---|---:|---:|---:|---:|---:|')
+    print('\n| size | rate | case | node | frames/s handled | CPU per frame | of it, models '
+          '| % of one core | x bare | step processing p50 |')
+    print('|---|---:|---|---|---:|---:|---:|---:|---:|---:|')
     for r in rows:
         name = NODE_NAMES.get((r['case'], r['node']), NODE_NAMES[r['node']])
-        print('| %s | %g | %s | %s | %.1f | %.2f ms | %.1f | %s | %s |' % (
+        print('| %s | %g | %s | %s | %.1f | %.2f ms | %s | %.1f | %s | %s |' % (
             r['size'], r['fps'], r['case'], name, r['handled_fps'], r['cpu_ms_per_frame'],
-            r['cpu_percent'], r.get('x_bare') or '-',
+            '%.2f ms' % r['models_cpu_ms_per_frame'] if r.get('models_cpu_ms_per_frame')
+            else '-', r['cpu_percent'], r.get('x_bare') or '-',
             '%.1f ms' % r['processing_ms_p50'] if r.get('processing_ms_p50') else '-'))
     print('\nmachine load average (1 min) during the run: %.1f to %.1f on %d CPUs' % (
         min(loads), max(loads), os.cpu_count()))
-    print('\nCortex-A53, an estimate (not measured): CPU per frame here times %g to %g; the '
-          "step's rate and the cores left on 2 and 4 cores:" % A53_FACTORS)
+    print("\nCortex-A53, an estimate (not measured): the models' CPU a frame here times %g to "
+          "%g, everything else times %g to %g; the step's rate and the cores left on 2 and 4 "
+          'cores:' % (A53_MODELS + A53_OTHER))
     print('\n| size | rate | case | camera, cores | step, ms a frame | viewer, ms a frame | '
           'step fps, 2 cores | left | step fps, 4 cores | left |')
     print('|---|---:|---|---:|---:|---:|---:|---:|---:|---:|')
     for line in estimate:
-        low, high = (line['x%g' % f] for f in A53_FACTORS)
+        low, high = line['low'], line['high']
 
         def span(key, index=None):
             a, b = (low[key], high[key]) if index is None else (low[key][index],
@@ -476,7 +509,8 @@ def main():
     save_results('hand_signs-py%d%d' % sys.version_info[:2], {
         'sizes': options.sizes, 'rates': rates, 'window_s': options.window,
         'rounds': options.rounds, 'threads': threads, 'cpus': os.cpu_count(),
-        'load_average': [min(loads), max(loads)], 'a53_factors': A53_FACTORS,
+        'load_average': [min(loads), max(loads)],
+        'a53_factors': {'models': A53_MODELS, 'other': A53_OTHER},
         'rows': rows, 'a53_estimate': estimate, 'runs': results})
 
 

@@ -64,8 +64,9 @@ import sys
 import tempfile
 import time
 
-from bench_common import (BENCH, CLK_TCK, cpu_ticks, FIRST_FRAME_MARK, local_node_env,
-                          read_results, save_results, start_helper)
+from bench_common import (BENCH, CLK_TCK, cpu_ticks, FIRST_FRAME_MARK, fresh_report,
+                          local_node_env, processing_values, read_results, save_results,
+                          start_helper)
 from bench_hand_signs import hand_photo_path, make_clip
 import ros_harness
 
@@ -73,9 +74,7 @@ SIZES = '640x480,1280x720'
 CASES = ('bare', 'circle', 'no hand', 'hand')
 SETTLE_S = 3.0
 START_S = 90.0
-REPORT_S = 10.0
 PROFILE = ros_harness.SHARE / 'config' / 'fastdds_image_profile.xml'
-PROCESSING = 'vision_step: processing'
 # What the node's /diagnostics says of its processing time, where it says it (p50, ms).
 SPLIT_KEYS = {'processing p50 ms': 'processing_ms_p50', 'models p50 ms': 'models_ms_p50',
               'rest p50 ms': 'rest_ms_p50'}
@@ -150,19 +149,6 @@ def model_inputs(size, clip):
         inputs['hand'] = (LANDMARK_FILE, rotated_crop(
             frame, (region.x, region.y), region.side, region.rotation, 224, (0.0, 1.0)).tensor)
     return inputs
-
-
-def processing_values(arrays):
-    """Return the newest {key: value} of vision_step's processing status, or {}."""
-    return ros_harness.status_values(arrays, PROCESSING)
-
-
-def fresh_report(arrays):
-    """Wait for a /diagnostics report newer than those collected; return its values."""
-    count = len(arrays)
-    ros_harness.wait_until(lambda: len(arrays) > count and processing_values(arrays),
-                           REPORT_S, 0.01, 'a /diagnostics report')
-    return processing_values(arrays)
 
 
 def camera_process(size, fps, device, env):
