@@ -212,3 +212,10 @@ def fresh_report(arrays):
     ros_harness.wait_until(lambda: len(arrays) > count and processing_values(arrays),
                            REPORT_S, 0.01, 'a /diagnostics report')
     return processing_values(arrays)
+
+
+def print_shares(title, shares, total_ms, digits=2):
+    """Print a table of {name: share of total_ms} as shares and ms a frame, largest first."""
+    print('\n| %s | share | ms a frame |\n|---|---:|---:|' % title)
+    for name, share in sorted(shares.items(), key=lambda item: -item[1]):
+        print('| %s | %.0f%% | %.*f |' % (name, 100.0 * share, digits, share * total_ms))

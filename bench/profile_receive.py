@@ -39,7 +39,8 @@ import sys
 import tempfile
 import time
 
-from bench_common import BENCH, CLK_TCK, FIRST_FRAME_MARK, local_node_env, start_helper
+from bench_common import (BENCH, CLK_TCK, FIRST_FRAME_MARK, local_node_env, print_shares,
+                          start_helper)
 from bench_receive import parse_sizes, receiver_command, RECEIVERS
 import ros_harness
 
@@ -159,9 +160,7 @@ def main(argv=None):
     if shares is None:
         print('\n(no perf here: apt-get install linux-perf for the user time by code)')
         return 0
-    print('\n| user time by code | share | ms a frame |\n|---|---:|---:|')
-    for name, share in sorted(shares.items(), key=lambda item: -item[1]):
-        print('| %s | %.0f%% | %.3f |' % (name, 100.0 * share, share * user_ms))
+    print_shares('user time by code', shares, user_ms, digits=3)
     return 0
 
 

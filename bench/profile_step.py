@@ -44,7 +44,7 @@ import sys
 import tempfile
 import time
 
-from bench_common import CLK_TCK, local_node_env
+from bench_common import CLK_TCK, local_node_env, print_shares
 from bench_hand_signs import hand_photo_path, make_clip
 from bench_step_cpu import camera_process, START_S
 from profile_receive import thread_ticks
@@ -167,9 +167,7 @@ def main(argv=None):
         print('\n(no py-spy here: pip install py-spy for the worker by stage)')
         return 0
     worker_ms = 1e3 * groups.get(WORKER, 0) / CLK_TCK / frames
-    print('\n| worker by stage | share | ms a frame |\n|---|---:|---:|')
-    for name, share in sorted(shares.items(), key=lambda item: -item[1]):
-        print('| %s | %.0f%% | %.2f |' % (name, 100.0 * share, share * worker_ms))
+    print_shares('worker by stage', shares, worker_ms)
     return 0
 
 
