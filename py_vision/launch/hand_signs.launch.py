@@ -47,16 +47,18 @@ from launch_ros.parameter_descriptions import ParameterValue
 from launch_ros.substitutions import FindPackageShare
 
 # The camera on the boards' Cortex-A53s (docs/boards.md, from bench/bench_hand_signs.py): the
-# step processes 1 to 4 frames a second there, and every frame the camera takes beyond that
-# costs the camera and the step's subscription CPU for nothing; on two cores (the ZUBoard 1CG)
-# 640x480 leaves nothing of the board, 320x240 some (the models see the same either way).
-BOARD_FRAMERATE = '5.0'
+# step processes 3 to 7 frames a second there, so 10 fps hands it a frame at most 0.1 s old
+# while costing the camera a third to half a core at 640x480; on two cores (the ZUBoard 1CG)
+# 640x480 leaves nothing of the board at 10 fps and next to nothing at 5, 320x240 at 10 fps
+# a third to half a core (the models see the same either way).
+BOARD_FRAMERATE = '10.0'
 TWO_CORE_SIZE = {'image_width': '320', 'image_height': '240'}
-# The command path's timings there: a processed frame every 0.25 to 0.8 s, and a command
-# decided up to a frame period (0.2 s at 5 fps: the step takes the newest frame) plus its
+# The command path's timings there: a processed frame every 0.14 to 0.33 s, and a command
+# decided up to a frame period (0.1 s at 10 fps: the step takes the newest frame) plus its
 # processing after its frame arrived. The step's own 0.5 s would stop the robot between frames
-# or for a frame not yet old: 1.5 s keeps the watchdog for a lost camera and stale frames.
-BOARD_COMMAND_S = '1.5'
+# or for a frame not yet old: 1.0 s, three times the longest, keeps the watchdog for a lost
+# camera and stale frames.
+BOARD_COMMAND_S = '1.0'
 ARM_MACHINES = ('aarch64', 'arm64', 'armv7l', 'armv8l')
 # The camera's arguments with a default of this launch's own: name -> meaning.
 BOARD_ARGUMENTS = {

@@ -322,9 +322,9 @@ def test_hand_signs_starts_turtlesim_only_where_it_has_a_display(
 
 @needs_launch
 @pytest.mark.parametrize('machine, given, camera, command', [
-    ('aarch64/2', {}, (320, 240, 5.0), (1.5, 1.5)),       # ZUBoard 1CG: two Cortex-A53s
+    ('aarch64/2', {}, (320, 240, 10.0), (1.0, 1.0)),      # ZUBoard 1CG: two Cortex-A53s
     ('aarch64/4', {'framerate': 12, 'max_frame_age': 0.8},  # four: the size of params_file;
-     (640, 480, 12.0), (1.5, 0.8)),                       # an argument wins
+     (640, 480, 12.0), (1.0, 0.8)),                       # an argument wins
     ('x86_64/2', {'threads': 2}, (640, 480, 10.0), (0.5, 0.5)),  # a PC: params_file
 ])
 def test_hand_signs_camera_on_a_board_and_on_a_pc_and_step_arguments_reach_the_step(
