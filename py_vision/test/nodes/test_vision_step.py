@@ -20,7 +20,9 @@ package would put it there.
 """
 
 import os
+from pathlib import Path
 import re
+import shutil
 import signal
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -35,80 +37,13 @@ from std_msgs.msg import String
 RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 OUTPUT = 'vision_step/image'
 PROCESSING = 'vision_step: processing'  # the node's status in /diagnostics
-
-USER_STEPS = """
-import os
-
-from py_vision.params import Spec
-from py_vision.steps.api import Step
-from std_msgs.msg import String
-
-
-class Invert(Step):
-    PARAMETERS = (
-        Spec('gain', 1.0, 'how bright the inverted image is', (0.0, 4.0), live=True),
-        Spec('label', 'inv', 'what it calls itself', choices=('inv', 'neg')),
-    )
-
-    def start(self, context):
-        self.gain = context.parameters['gain']
-        self.said = context.create_publisher(String, 'user_step/said')
-        return 'gain %g, label %s' % (self.gain, context.parameters['label'])
-
-    def parameters_changed(self, changes):
-        self.gain = changes['gain']
-
-    def process(self, image, header):
-        self.said.publish(String(data='%s gain %g' % (header.frame_id, self.gain)))
-        if header.frame_id == 'nothing':
-            return None
-        return 255 - image
-
-
-class Plain:
-    def process(self, image, header):
-        return image[:, ::-1].copy()
-
-
-class Failing(Step):
-    def process(self, image, header):
-        if header.frame_id == 'bad':
-            raise ValueError('cannot read frame %d' % header.stamp.sec)
-        if header.frame_id == 'wrong':
-            return 'an answer'
-        return image
-
-
-class OwnModel(Step):
-    # A model run by the user's own runtime, counted as one with model_time.timing().
-    def process(self, image, header):
-        import time
-        from py_vision.models.model_time import timing
-        with timing():
-            time.sleep(0.05)
-        return image
-
-
-class NotAStep:
-    pass
-
-
-class BadInit(Step):
-    def __init__(self):
-        raise RuntimeError('no licence key')
-
-
-class BadModel(Step):
-    def start(self, context):
-        from py_vision.models.runtime import load
-        load(os.environ['USER_STEP_MODEL'])
-"""
+TESTS = Path(__file__).resolve().parents[1]  # user_steps.py, the user's own steps
 
 
 @pytest.fixture
 def user_env(ros_env, tmp_path):
     """Return the node environment with the user's step modules on PYTHONPATH, a bad model."""
-    (tmp_path / 'user_steps.py').write_text(USER_STEPS)
+    shutil.copy(TESTS / 'user_steps.py', tmp_path)
     (tmp_path / 'broken_steps.py').write_text('import no_such_dependency_xyz\n')
     model = tmp_path / 'truncated.tflite'
     model.write_bytes(b'TFL3' + bytes(100))
