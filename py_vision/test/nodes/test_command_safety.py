@@ -15,8 +15,8 @@
 """
 hand_signs' commands fail safe, in the installed vision_step, seen by subscribers of the test.
 
-The step is hand_signs itself with its tracker replaced (a step double, SCRIPTED_STEP, written
-to a temporary folder on PYTHONPATH): what a frame shows is written in its first pixel, blue the
+The step is hand_signs itself with its tracker replaced (a step double, scripted_signs.py in
+the tests' folder, put on PYTHONPATH): what a frame shows is written in its first pixel, blue the
 hand (landmark sets from hand_poses: a thumbs-up, a fist, a thumbs-up scoring 0.3), green what
 the tracker does with it (raise, block until the step is closed, take a second). The frames
 come from the test's own publisher, the commands go to the test's own subscribers on
