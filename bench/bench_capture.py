@@ -31,9 +31,10 @@ emulated webcam, docs/emulated_cameras.md), each run in a process of its own:
   its BGR image (``Frame.image('bgr8')``), its pixels as sent (``Frame.image('native')``: the
   image the node publishes with output_encoding native), its JPEG as the camera sent it
   (``Frame.jpeg``), or
-  the frame published as usbcam_publisher publishes it (`ImagePublisher`: the Image holding the
-  frame's bytes, rclpy copying them into the middleware's message; nobody subscribed, so
-  nothing crosses a process), as bgr8 and as native (the camera's YUYV, yuv422_yuy2).
+  the frame published as usbcam_publisher publishes it (`ImagePublisher`: the frame converted,
+  or copied, straight into the serialized Image that goes to rcl, which the middleware copies;
+  nobody subscribed, so nothing crosses a process), as bgr8 and as native (the camera's YUYV,
+  yuv422_yuy2).
 
 The cost is the CPU time of the thread that reads the frames (the system calls, OpenCV's read
 and conversion, py_vision's own work; not the emulated camera's thread that makes the frames,

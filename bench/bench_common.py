@@ -207,10 +207,13 @@ def processing_values(arrays):
 
 
 def fresh_report(arrays):
-    """Wait for a /diagnostics report newer than those collected; return its values."""
-    count = len(arrays)
-    ros_harness.wait_until(lambda: len(arrays) > count and processing_values(arrays),
-                           REPORT_S, 0.01, 'a /diagnostics report')
+    """Wait for a report of vision_step's newer than those collected; return its values."""
+    def reports():  # other nodes' /diagnostics come on the same topic
+        return sum(1 for array in list(arrays)
+                   if any(status.name == PROCESSING for status in array.status))
+    count = reports()
+    ros_harness.wait_until(lambda: reports() > count, REPORT_S, 0.01,
+                           "a report of vision_step's on /diagnostics")
     return processing_values(arrays)
 
 

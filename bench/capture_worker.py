@@ -87,7 +87,7 @@ else:
             return frame.jpeg
         output = way.split()[0]
         return images.publish(Header(), lambda: frame.image(output), None,
-                              frame.encoding(output))
+                              frame.encoding(output), None, lambda out: frame.image(output, out))
 
     def on_frame(camera, frame):
         keep(frame)

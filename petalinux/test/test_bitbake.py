@@ -412,6 +412,8 @@ def test_the_image_gets_the_wheels_files_as_the_readme_says(fetched, tmp_path):
     assert run.returncode == 0, run.stdout + run.stderr
     site = next(destdir.rglob('site-packages'))
     installed = sorted(str(path.relative_to(site)) for path in site.rglob('*') if path.is_file())
+    # Compiled by the Python that runs installer: the image's build host compiles them with
+    # its Python 3.10 (cpython-310, as petalinux/README.md says); here with this one's.
     tag = 'cpython-%d%d' % sys.version_info[:2]
     modules = ['__init__', 'interpreter', 'metrics_interface', 'metrics_portable']
     info = 'tflite_runtime-2.14.0.dist-info/'

@@ -61,22 +61,24 @@ class _RecentValues:
         self._clock = clock
         self._values: Deque[Tuple[float, float]] = collections.deque()
 
-    def add(self, value: float) -> None:
-        self._values.append((self._clock(), value))
+    def add(self, value: float, at: Optional[float] = None) -> None:
+        """Add a value at `at` (one reading of the clock for the values of one step)."""
+        self._values.append((self._clock() if at is None else at, value))
 
-    def _recent(self) -> Deque[Tuple[float, float]]:
-        horizon = self._clock() - self.window_s
+    def _recent(self, now: Optional[float] = None) -> Deque[Tuple[float, float]]:
+        horizon = (self._clock() if now is None else now) - self.window_s
         while self._values and self._values[0][0] < horizon:
             self._values.popleft()
         return self._values
 
-    def count(self, condition: Callable[[float], bool]) -> int:
-        """Return how many of the window's values meet condition."""
-        return sum(1 for _, value in self._recent() if condition(value))
+    def count(self, condition: Callable[[float], bool], now: Optional[float] = None) -> int:
+        """Return how many of the window's values (the window ending now) meet condition."""
+        return sum(1 for _, value in self._recent(now) if condition(value))
 
-    def percentiles_ms(self) -> Tuple[Optional[float], Optional[float]]:
+    def percentiles_ms(self, now: Optional[float] = None
+                       ) -> Tuple[Optional[float], Optional[float]]:
         """Return (p50, p99) in milliseconds, or (None, None) when the window is empty."""
-        values = sorted(value for _, value in self._recent())
+        values = sorted(value for _, value in self._recent(now))
         if not values:
             return None, None
         return (round(percentile(values, 0.5) * 1e3, 2),
@@ -160,9 +162,11 @@ class LatestFrameWorker(Generic[T]):
     def snapshot(self) -> Dict[str, Optional[float]]:
         """Return the counts since start and the recent percentiles, JSON-able."""
         with self._cond:
-            processing = self._processing_s.percentiles_ms()
-            age = self._age_s.percentiles_ms()
-            part, rest = self._part_s.percentiles_ms(), self._rest_s.percentiles_ms()
+            # One window for all: the processing, its part and the rest cover the same steps.
+            now = self._clock()
+            processing = self._processing_s.percentiles_ms(now)
+            age = self._age_s.percentiles_ms(now)
+            part, rest = self._part_s.percentiles_ms(now), self._rest_s.percentiles_ms(now)
             return {
                 'frames_in': self.frames_in,
                 'processed': self.processed,
@@ -175,7 +179,7 @@ class LatestFrameWorker(Generic[T]):
                 'part_ms_p99': part[1],
                 'rest_ms_p50': rest[0],
                 'rest_ms_p99': rest[1],
-                'part_items': self._part_s.count(lambda seconds: seconds > 0),
+                'part_items': self._part_s.count(lambda seconds: seconds > 0, now),
                 'cpu_ms': int(round(self._cpu_s * 1e3)),
                 'part_cpu_ms': int(round(self._part_cpu_s * 1e3)),
             }
@@ -225,9 +229,10 @@ class LatestFrameWorker(Generic[T]):
             del item  # a frame is large: do not hold it while waiting for the next one
             with self._cond:
                 self.processed += 1
-                self._processing_s.add(took)
+                done = self._clock()
+                self._processing_s.add(took, done)
                 self._cpu_s += cpu
                 if self._part_clock is not None:
-                    self._part_s.add(part[0])
-                    self._rest_s.add(took - part[0])
+                    self._part_s.add(part[0], done)
+                    self._rest_s.add(took - part[0], done)
                     self._part_cpu_s += part[1]

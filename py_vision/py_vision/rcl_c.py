@@ -18,13 +18,17 @@ rcl's C API where py_vision calls it directly: the libraries rclpy loaded, a mes
 A serialized message is rcl_serialized_message_t, whose C layout Humble and Jazzy share.
 
 serialized_take (a subscription's messages taken into memory of our own) and
-serialized_publisher (messages published from it) bind their functions from here.
+serialized_publisher (messages published from it) bind their functions here (`function`), and
+read the error rcl left when a call failed (`error_text`), as rclpy does after its own calls.
 """
 
 import ctypes
-from typing import Optional
+from typing import Any, Dict, Optional, Sequence, Tuple
 
-__all__ = ['Allocator', 'loaded_library', 'SerializedMessage']
+__all__ = ['Allocator', 'error_text', 'function', 'loaded_library', 'SerializedMessage']
+
+# rcutils' error_handling.h: RCUTILS_ERROR_MESSAGE_MAX_LENGTH (Humble and Jazzy).
+_ERROR_LENGTH = 1024
 
 
 class Allocator(ctypes.Structure):
@@ -53,3 +57,47 @@ def loaded_library(name: str) -> Optional[ctypes.CDLL]:
     except OSError:
         pass
     return None
+
+
+_bound: Dict[Tuple[str, str], Any] = {}
+
+
+def function(library: str, name: str, argtypes: Optional[Sequence[Any]], restype: Any):
+    """
+    Return the C function `name` of the loaded library (librcl.so), typed, or None.
+
+    None where the process has not loaded the library or it has no such function (another
+    middleware layer, an older rcl): the caller then does as rclpy does. Bound once.
+    """
+    key = (library, name)
+    if key not in _bound:
+        found = None
+        try:
+            loaded = loaded_library(library)
+            found = getattr(loaded, name) if loaded is not None else None
+        except (OSError, AttributeError):
+            found = None
+        if found is not None:
+            if argtypes is not None:
+                found.argtypes = list(argtypes)
+            found.restype = restype
+        _bound[key] = found
+    return _bound[key]
+
+
+class _ErrorString(ctypes.Structure):
+    """rcutils_error_string_t: the message, NUL-terminated."""
+
+    _fields_ = [('str', ctypes.c_char * _ERROR_LENGTH)]
+
+
+def error_text() -> str:
+    """Return the error rcl set on this thread by a call that failed, and clear it."""
+    is_set = function('librcutils.so', 'rcutils_error_is_set', [], ctypes.c_bool)
+    get = function('librcutils.so', 'rcutils_get_error_string', [], _ErrorString)
+    reset = function('librcutils.so', 'rcutils_reset_error', [], None)
+    if is_set is None or get is None or reset is None or not is_set():
+        return 'no error text'
+    text = get().str.decode('utf-8', 'replace').strip()
+    reset()
+    return text or 'no error text'

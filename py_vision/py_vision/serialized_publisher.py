@@ -29,7 +29,7 @@ call. Where this is not possible (no librcl in the process, an rclpy without `po
 import ctypes
 
 import numpy as np
-from py_vision.rcl_c import loaded_library, SerializedMessage
+from py_vision.rcl_c import error_text, function, SerializedMessage
 from py_vision.serialized import SerializedStamped
 
 __all__ = ['SerializedPublisher', 'StampedPublisher']
@@ -39,19 +39,9 @@ _RCL_RET_OK = 0
 
 def _rcl_publish():
     """Return rcl_publish_serialized_message from the process' librcl, or None."""
-    if not hasattr(_rcl_publish, 'function'):
-        function = None
-        try:
-            rcl = loaded_library('librcl.so')
-            function = rcl.rcl_publish_serialized_message if rcl is not None else None
-        except (OSError, AttributeError):
-            function = None
-        if function is not None:
-            function.argtypes = [ctypes.c_void_p, ctypes.POINTER(SerializedMessage),
-                                 ctypes.c_void_p]
-            function.restype = ctypes.c_int
-        _rcl_publish.function = function
-    return _rcl_publish.function
+    return function('librcl.so', 'rcl_publish_serialized_message',
+                    [ctypes.c_void_p, ctypes.POINTER(SerializedMessage), ctypes.c_void_p],
+                    ctypes.c_int)
 
 
 class SerializedPublisher:
@@ -95,8 +85,8 @@ class SerializedPublisher:
         with self._handle:
             status = self._publish(self._rcl_publisher, self._pointer, None)
         if status != _RCL_RET_OK:
-            raise RuntimeError('rcl_publish_serialized_message failed (%d) on %s' % (
-                status, self.publisher.topic_name))
+            raise RuntimeError('rcl_publish_serialized_message failed (%d) on %s: %s' % (
+                status, self.publisher.topic_name, error_text()))
 
 
 class StampedPublisher:

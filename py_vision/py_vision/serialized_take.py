@@ -34,7 +34,7 @@ import ctypes
 from typing import Optional
 
 import numpy as np
-from py_vision.rcl_c import Allocator, loaded_library, SerializedMessage
+from py_vision.rcl_c import Allocator, error_text, function, SerializedMessage
 
 __all__ = ['SerializedTake', 'TakeError']
 
@@ -56,9 +56,13 @@ class _C:
     def bind(cls) -> bool:
         if cls.take is not None or cls.failed is not None:
             return cls.failed is None
-        rcl, rcutils = loaded_library('librcl.so'), loaded_library('librcutils.so')
-        if rcl is None or rcutils is None:
-            cls.failed = 'librcl.so or librcutils.so is not loaded'
+        get_allocator = function('librcutils.so', 'rcutils_get_default_allocator', None,
+                                 Allocator)
+        take = function('librcl.so', 'rcl_take_serialized_message',
+                        [ctypes.c_void_p, ctypes.POINTER(SerializedMessage), ctypes.c_void_p,
+                         ctypes.c_void_p], ctypes.c_int)
+        if get_allocator is None or take is None:
+            cls.failed = "librcl.so's or librcutils.so's functions are not loaded"
             return False
         try:
             libc = ctypes.CDLL(None)
@@ -66,13 +70,7 @@ class _C:
             libc.malloc.argtypes = [ctypes.c_size_t]
             libc.free.restype = None
             libc.free.argtypes = [ctypes.c_void_p]
-            get_allocator = rcutils.rcutils_get_default_allocator
-            get_allocator.restype = Allocator
-            take = rcl.rcl_take_serialized_message
-            take.restype = ctypes.c_int
-            take.argtypes = [ctypes.c_void_p, ctypes.POINTER(SerializedMessage),
-                             ctypes.c_void_p, ctypes.c_void_p]
-        except AttributeError as error:
+        except (OSError, AttributeError) as error:
             cls.failed = str(error)
             return False
         cls.libc, cls.allocator, cls.take = libc, get_allocator(), take
@@ -123,6 +121,7 @@ class SerializedTake:
         if status != 0:
             if status == _TAKE_FAILED:
                 return None
-            raise TakeError('rcl_take_serialized_message returned %d' % status)
+            raise TakeError('rcl_take_serialized_message returned %d: %s' % (
+                status, error_text()))
         self._capacity = message.buffer_length + _MARGIN
         return np.asarray(owned)

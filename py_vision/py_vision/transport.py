@@ -31,6 +31,7 @@ docs/transport.md says why.
 """
 
 from dataclasses import dataclass
+import threading
 from typing import Callable, Optional, Tuple
 
 import cv2
@@ -110,6 +111,9 @@ class ImagePublisher:
 
     With lazy_raw False the raw image is published whatever its subscribers (a benchmark's
     stream, whose cost must not depend on who listens).
+
+    publish() may be called from more than one thread (a camera's video decoder ending while
+    the next one starts): one frame at a time goes through the buffer.
     """
 
     def __init__(self, parameters: Parameters, base_topic: str, qos, bridge,
@@ -133,6 +137,7 @@ class ImagePublisher:
         # the image).
         self._fields = None
         self._pixels = None
+        self._lock = threading.Lock()
 
     def _raw_message(self, pixels: np.ndarray, encoding: str) -> Image:
         """
@@ -224,6 +229,10 @@ class ImagePublisher:
         is encoded from when there is none (image() when not given: `encoding` is bgr8 or
         mono8 then). Returns (raw published, compressed published).
         """
+        with self._lock:
+            return self._publish(header, image, jpeg, encoding, picture, into)
+
+    def _publish(self, header, image, jpeg, encoding, picture, into) -> Tuple[bool, bool]:
         raw_done = compressed_done = False
         if self.wants_raw() or not self._lazy_raw:
             if not self._publish_raw(header, image, encoding, into):

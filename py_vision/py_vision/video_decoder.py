@@ -204,6 +204,8 @@ class VideoDecoder:
                         self._fail('the decoder stopped')
                     return
                 with self._lock:
+                    if self._closed:  # a picture read after close() goes nowhere
+                        return
                     tag = self._tags.popleft() if self._tags else None
                 self.decoded += 1
                 self._on_picture(picture, tag)

@@ -169,7 +169,10 @@ class V4L2Device:
         # What the last walk of the controls found, and a request that reads all their values
         # in one ioctl: while those values stay the same, so do the controls' ranges and flags
         # (an automatic mode makes others inactive by its value).
+        # A new format or rate may change ranges and flags without a value (a sensor's
+        # exposure range): forget_controls() then has them walked again.
         self._known: Optional[List[ControlInfo]] = None
+        self._known_values: Optional[List[int]] = None
         self._values_request = None
         try:
             self.fd = os.open(path, os.O_RDWR | os.O_NONBLOCK)
@@ -306,6 +309,10 @@ class V4L2Device:
         self._values_request = None
         self._known_values = self._read_values()
         return list(found)
+
+    def forget_controls(self) -> None:
+        """Have the next controls() ask for every control again (the format or rate changed)."""
+        self._known = self._known_values = self._values_request = None
 
     def _read_values(self) -> Optional[List[int]]:
         """Return the values of the controls last walked, read in one ioctl; None if not."""

@@ -171,6 +171,7 @@ class V4L2Source:
             raise V4L2Error(open_problem(error.errno), error.errno) from None
         _, width, height, code, _, bytesperline, *_ = _FORMAT.unpack(request)
         rate = self._set_rate(fps)
+        self.device.forget_controls()  # a driver may change ranges with the format or rate
         self._format = StreamFormat(fourcc_text(code), width, height, rate or fps, bytesperline)
         self._pixel_format = pixel_format = self._format.pixel_format
         if pixel_format is not None and not pixel_format.compressed:

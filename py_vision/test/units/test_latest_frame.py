@@ -167,6 +167,33 @@ def test_a_part_clock_splits_each_items_time_into_that_part_and_the_rest(closing
     assert later['part_items'] == 0
 
 
+def test_the_processing_and_the_rest_cover_the_same_steps_however_the_clock_moves(closing):
+    # A clock that moves a little every time it is read (a loaded machine): the processing
+    # time and the rest of it (no part here: all of it) must come from one window, whatever
+    # falls out of it between two readings.
+    class Ticking(FakeClock):
+        def __call__(self):
+            self.t += 1e-4
+            return self.t
+    clock = Ticking()
+
+    def step(seconds):
+        clock.t += seconds
+    worker = LatestFrameWorker(step, window_s=1.0, clock=clock,
+                               part_clock=lambda: (0.0, 0.0))
+    closing(worker)
+    for count, seconds in enumerate([0.01 * (i % 7 + 1) for i in range(40)], start=1):
+        worker.offer(seconds)
+        wait_until(lambda: worker.processed == count, TIMEOUT, interval=0.001,
+                   what='step %d' % count)
+    for _ in range(12000):  # past the window's end, a tenth of a millisecond at a time
+        clock.t += 1e-4
+        snap = worker.snapshot()
+        assert (snap['rest_ms_p50'], snap['rest_ms_p99']) == (
+            snap['processing_ms_p50'], snap['processing_ms_p99']), snap
+    assert snap['processing_ms_p50'] is None
+
+
 def test_a_step_that_raises_is_reported_and_the_worker_goes_on():
     errors = []
 

@@ -24,6 +24,7 @@ padding); a CameraInfo's bytes follow its stamp and frame_id. Published through 
 written into the message, they reach a subscriber as the Image the bridge makes of the pixels.
 """
 
+import ctypes
 import time
 from types import SimpleNamespace
 
@@ -33,8 +34,9 @@ from py_vision.capture.pixel_formats import FORMATS
 from py_vision.capture.source import Frame
 from py_vision.cv_bridge import CvBridge
 from py_vision.params import Parameters
+from py_vision.rcl_c import error_text
 from py_vision.serialized import SerializedImage, SerializedStamped
-from py_vision.serialized_publisher import SerializedPublisher
+from py_vision.serialized_publisher import SerializedPublisher, StampedPublisher
 from py_vision.transport import ImagePublisher
 import pytest
 import rclpy
@@ -174,10 +176,10 @@ def node():
     domain.release()
 
 
-def receive(node, topic, count, publish):
+def receive(node, topic, count, publish, msg_type=Image):
     """Publish with publish(index) until count messages of topic came back; return them."""
     got = []
-    subscription = node.create_subscription(Image, topic, got.append, RELIABLE)
+    subscription = node.create_subscription(msg_type, topic, got.append, RELIABLE)
     try:
         # Published once the subscription is matched, each message then waited for.
         ros_harness.wait_until(lambda: node.count_subscribers(topic) > 0, 10,
@@ -262,3 +264,46 @@ def test_image_publisher_copies_pixels_it_cannot_convert_into(node):
         sent.append(expected)
         assert images.publish(header('step', index), lambda: pixels) == (True, False)
     assert receive(node, 'drawn', 3, publish) == sent
+
+
+def test_where_rcl_cannot_be_reached_images_and_camera_infos_go_out_through_rclpy(node):
+    """An rclpy whose publishers do not give their rcl publisher: the messages rclpy sends."""
+    images = ImagePublisher(Parameters(node), 'fallback', RELIABLE, CvBridge())
+    images._serialized.available = False
+    bridge, sent = CvBridge(), []
+
+    def publish(index):
+        frame = frame_of('YUYV', 32, 16, index)
+        expected = bridge.cv2_to_imgmsg(frame.image('bgr8').copy(), 'bgr8')
+        expected.header = header('cam', index)
+        sent.append(expected)
+        assert images.publish(header('cam', index), lambda: frame.image('bgr8'), None, 'bgr8',
+                              None, lambda out: frame.image('bgr8', out)) == (True, False)
+    assert receive(node, 'fallback', 3, publish) == sent
+
+    infos = StampedPublisher(node.create_publisher(CameraInfo, 'fallback_info', RELIABLE))
+    infos._out.available = False
+    info, stamps = CameraInfo(width=32, height=16), []
+
+    def publish_info(index):
+        info.header = header('cam', index)
+        stamps.append(index)
+        infos.publish(info)
+    got = receive(node, 'fallback_info', 3, publish_info, CameraInfo)
+    assert [msg.header.stamp.sec for msg in got] == stamps
+    assert all(msg.width == 32 and msg.header.frame_id == 'cam' for msg in got)
+
+
+def test_a_publish_rcl_refuses_says_rcls_error_and_leaves_none_behind(node):
+    publisher = node.create_publisher(Image, 'refused', RELIABLE)
+    sender = SerializedPublisher(publisher)
+    serialized = SerializedImage()
+    written(serialized, header('cam', 1), 2, 2, 'mono8', 2, False, bytes(4))
+    # An rcl publisher whose implementation is gone: rcl refuses it and says why.
+    empty = ctypes.create_string_buffer(64)
+    sender._rcl_publisher = ctypes.c_void_p(ctypes.addressof(empty))
+    with pytest.raises(RuntimeError, match=r'rcl_publish_serialized_message failed \(\d+\) on '
+                                           r'/refused: .*publisher'):
+        sender.publish(serialized.message())
+    assert error_text() == 'no error text'   # read and cleared: the next failure is its own
+    node.destroy_publisher(publisher)
