@@ -18,19 +18,21 @@ bitbake, the tool PetaLinux 2023.2 runs, on the recipes enable_ros.py places in 
 ../shared/yocto/yocto-langdale.tar.zst holds bitbake 2.2 and the layers PetaLinux 2023.2 builds
 from: openembedded-core and meta-openembedded at langdale, Xilinx's meta-ros at rel-v2023.2
 (PY_VISION_YOCTO names another copy). It is unpacked once into ~/.cache/py_vision/yocto/
-(PY_VISION_YOCTO_CACHE names another place; again when the tarball changes). There, in a folder
-of this checkout's own, a board's project skeleton (fixtures/zub1cg) is copied afresh and
-enable_ros.py run on it, and a build folder's bblayers.conf lists those layers and the
-project's meta-user layer, as PetaLinux's does, but without PetaLinux's
-BB_DANGLINGAPPENDS_WARNONLY: here a bbappend without its recipe is an error. MACHINE is
-qemuarm64 (Xilinx's layers are not there; PetaLinux's zynqmp machines are aarch64 too) and
-DISTRO nodistro; as root, the sanity class, which refuses root, is left out. There is no
-toolchain: the tests run what needs none, parsing, `bitbake -e`, the fetch and the licence
-checks (`do_patch` of the runtime, which has no patch, is told not to build quilt).
+(PY_VISION_YOCTO_CACHE names another place; again when the tarball changes). There, in a folder of
+its own for what the tests place (meta-user, enable_ros.py and the board's skeleton: one folder per
+version of them, whatever checkout or clone runs the tests), a board's project skeleton
+(fixtures/zub1cg) is copied afresh and enable_ros.py run on it, and a build folder's bblayers.conf
+lists those layers and the project's meta-user layer, as PetaLinux's does, but without PetaLinux's
+BB_DANGLINGAPPENDS_WARNONLY: here a bbappend without its recipe is an error. MACHINE is qemuarm64
+(Xilinx's layers are not there; PetaLinux's zynqmp machines are aarch64 too) and DISTRO nodistro;
+as root, the sanity class, which refuses root, is left out. There is no toolchain: the tests run
+what needs none, parsing, `bitbake -e`, the fetch and the licence checks (`do_patch` of the
+runtime, which has no patch, is told not to build quilt).
 
 The first parse of the 3300 recipes takes about 3 minutes on a 2-core machine alone (10 at
 load 10); bitbake keeps its cache in the build folder, which stays where it is, so later runs
-parse only the files enable_ros.py placed anew (10 to 50 s a command). Every bitbake command
+of the same recipes, a fresh clone's too, parse only the files enable_ros.py placed anew (10 to
+50 s a command). Every bitbake command
 holds the build folder's lock, so test workers, and two runs, take turns. Without the tarball,
 zstd, the host tools bitbake requires (scripts/test.sh installs chrpath, diffstat, gawk and
 cpio) or the en_US.UTF-8 locale these tests are skipped with the reason, and fail in CI. The
@@ -55,12 +57,28 @@ REPO = HERE.parents[1]
 TOOL = REPO / 'petalinux' / 'enable_ros.py'
 LAYER_SOURCE = REPO / 'petalinux' / 'meta-user'
 BOARD = 'zub1cg'
-# The unpacked layers, shared; the build folders, one set per checkout (another checkout has
-# other recipes). Not in .venv: tried there, bitbake's server (started as "bitbake-server", so
-# its Python does not know its own path) loaded .venv's packages and died in their start-up.
+# The unpacked layers, shared; the build folders, one set per version of what the tests place
+# (a checkout with other recipes gets its own; a fresh clone of the same ones finds bitbake's
+# cache of the last run). Not in .venv: tried there, bitbake's server (started as
+# "bitbake-server", so its Python does not know its own path) loaded .venv's packages and died
+# in their start-up.
 CACHE = Path(os.environ.get('PY_VISION_YOCTO_CACHE') or Path(
     os.environ.get('XDG_CACHE_HOME') or Path.home() / '.cache') / 'py_vision' / 'yocto')
-CHECKOUT = CACHE / ('checkout-' + hashlib.sha1(str(REPO).encode()).hexdigest()[:12])
+
+
+def _placed_version() -> str:
+    """Return a digest of what the tests place: meta-user, enable_ros.py, the skeleton."""
+    digest = hashlib.sha1()
+    for root in (LAYER_SOURCE, TOOL, HERE / 'fixtures' / BOARD):
+        files = [root] if root.is_file() else sorted(
+            path for path in root.rglob('*')
+            if path.is_file() and '__pycache__' not in path.parts)
+        for path in files:
+            digest.update(str(path.relative_to(REPO)).encode() + b'\0' + path.read_bytes())
+    return digest.hexdigest()[:12]
+
+
+CHECKOUT = CACHE / ('recipes-' + _placed_version())
 TARBALL = 'yocto-langdale.tar.zst'
 # The layers of the tarball, in bblayers.conf's order; the project's meta-user goes last.
 LAYERS = ('openembedded-core/meta', 'meta-oe', 'meta-python', 'meta-networking',
@@ -345,6 +363,11 @@ def fetched(build, tmp_path_factory):
     url = re.search(r'^SRC_URI = "(\S+)"$', recipe, re.M).group(1)
     wheel = url.rsplit('/', 1)[1]
     with locked():
+        # What a fetch stopped by a wrong checksum, or killed, left behind (wget's .tmp, a
+        # _bad-checksum_ copy) is no download cleanall knows of: it goes first.
+        for leftover in build.downloads.glob(wheel + '?*'):
+            if not leftover.name.endswith('.done'):
+                leftover.unlink()
         clean = build.bitbake('-c', 'cleanall', RUNTIME)
         assert clean.returncode == 0, describe(clean)
         assert not list(build.downloads.glob(wheel + '*'))
@@ -454,9 +477,13 @@ def test_a_wrong_sha256_stops_the_fetch(bb, fetched):
     recipe = bb.meta_user / RECIPE
     sha256 = re.search(r'^SRC_URI\[sha256sum\] = "(\w+)"$', recipe.read_text(), re.M).group(1)
     wrong = hashlib.sha256(b'not the wheel').hexdigest()
+    wheel = re.search(r'^SRC_URI = "\S+/(\S+)"$', recipe.read_text(), re.M).group(1)
     with changed(recipe, sha256, wrong):
         assert bb.bitbake('-c', 'cleanall', RUNTIME).returncode == 0  # a download, not a copy
         result = bb.bitbake('-c', 'fetch', RUNTIME)
+    # The refused download stays nowhere a later fetch would take it from.
+    for leftover in bb.downloads.glob(wheel + '*'):
+        leftover.unlink()
     assert result.returncode != 0, describe(result)
     assert 'Checksum mismatch' in result.output, describe(result)
     assert wrong in result.output and sha256 in result.output, describe(result)
