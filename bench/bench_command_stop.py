@@ -45,7 +45,7 @@ import tempfile
 import threading
 import time
 
-from bench_common import local_node_env, save_results, TESTS
+from bench_common import local_node_env, save_results, stopped_after, TESTS
 import ros_harness
 
 COMMAND_TIMEOUT = 0.5
@@ -174,26 +174,20 @@ def camera_stops(env, work_ms, rounds):
     peer = ros_harness.RosPeer(domain.value, name='bench_commands')
     bench = Bench(peer)
     times = []
-    try:
-        for _ in range(rounds):
-            start = bench.count()
-            bench.sending.set()
-            bench.moving_since(start)
-            bench.sending.clear()
-            time.sleep(2.0 / FPS)   # the frame being sent is out (last_sent is final)
-            last = bench.last_sent
-            zero = ros_harness.wait_until(lambda: bench.zero_after(last), 30.0, 0.005,
-                                          'the zero')
-            times.append(zero - last)
-    finally:
-        bench.close()
-        peer.close()
-        status = node.stop(signal.SIGINT, 15.0)
-        log = node.output()
-        node.kill()
-        domain.release()
-    if status != 0 or 'Traceback' in log:
-        raise SystemExit('vision_step ended with %s:\n%s' % (status, log))
+    with stopped_after(domain, peer, node):
+        try:
+            for _ in range(rounds):
+                start = bench.count()
+                bench.sending.set()
+                bench.moving_since(start)
+                bench.sending.clear()
+                time.sleep(2.0 / FPS)   # the frame being sent is out (last_sent is final)
+                last = bench.last_sent
+                zero = ros_harness.wait_until(lambda: bench.zero_after(last), 30.0, 0.005,
+                                              'the zero')
+                times.append(zero - last)
+        finally:
+            bench.close()
     return times
 
 
