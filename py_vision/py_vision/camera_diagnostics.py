@@ -75,6 +75,7 @@ class CameraMonitor:
             'device present': stats.present,
             'streaming': stats.streaming,
             'waiting': stats.waiting,
+            'io method': stats.io_method,
         }
         values.update(('subscribers %s' % topic.lstrip('/'), count)
                       for topic, count in subscribers.items())

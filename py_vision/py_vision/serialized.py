@@ -22,7 +22,8 @@ once, where they stay, and hands the middleware the finished bytes:
 
 - `SerializedImage`: a sensor_msgs/Image laid out once per layout (frame_id, size,
   encoding, step) in a buffer of its own, whose pixel bytes (`data()`) a conversion writes
-  into, and whose stamp is written per message;
+  into, and whose stamp is written per message; made with a `capacity`, its pixel bytes
+  stay at one place whatever the layout (`pixels()`), for a camera to capture into;
 - `SerializedStamped`: any message whose first field is a std_msgs/Header (CameraInfo),
   serialized once by rclpy while it stays the same object with the same frame_id, only its
   stamp written per message.
@@ -49,6 +50,10 @@ STAMP_OFFSET = len(ENCAPSULATION)
 _STAMP = struct.Struct('<iI')
 _UINT32 = struct.Struct('<I')
 _DATA_ALIGNMENT = 64
+# A message whose pixels stay at one place: the room its fields have before them, and the
+# pixels' alignment (a page: what a driver's DMA would ask of user memory).
+HEAD_ROOM = 4096
+_PAGE = 4096
 
 
 def _align(offset: int, size: int) -> int:
@@ -105,6 +110,30 @@ class _Buffer:
         return self.message
 
 
+class _PixelsInPlace(_Buffer):
+    """A message whose pixel bytes stay where they are: capacity of them, a page aligned."""
+
+    def __init__(self, capacity: int):
+        super().__init__()
+        self._memory = np.zeros(HEAD_ROOM + capacity + _PAGE, np.uint8)
+        base = self._memory.ctypes.data
+        self._pixels_at = HEAD_ROOM + (-(base + HEAD_ROOM) % _PAGE)
+        self.pixels = self._memory[self._pixels_at:self._pixels_at + capacity]
+        self.pixels_address = base + self._pixels_at
+
+    def place(self, size: int, aligned_at: int) -> np.ndarray:
+        """Lay a message of size bytes out so that its byte aligned_at is pixels' first."""
+        if aligned_at > HEAD_ROOM or size - aligned_at > self.pixels.size:
+            raise ValueError('the message does not fit around its pixels (fields of %d bytes '
+                             'of %d, pixels of %d of %d)' % (aligned_at, HEAD_ROOM,
+                                                             size - aligned_at,
+                                                             self.pixels.size))
+        start = self._pixels_at - aligned_at
+        self.message = self._memory[start:start + size]
+        self.address, self.size = self._memory.ctypes.data + start, size
+        return self.message
+
+
 class SerializedImage:
     """
     A sensor_msgs/Image kept serialized: laid out per layout, its pixels written in place.
@@ -113,10 +142,14 @@ class SerializedImage:
     layout only when one of them but the stamp changed, otherwise the stamp alone), then the
     pixels written into `data()` (`size` bytes: step x height unless said), then `message()`
     is published (`where()`: its address and size, for SerializedPublisher.publish_at).
+
+    With a capacity (bytes), the pixel bytes never move: `pixels()` (that many, a page
+    aligned) is where every layout puts them, its fields laid out before them; prepare()
+    raises ValueError for a layout whose pixels or fields (HEAD_ROOM) do not fit.
     """
 
-    def __init__(self):
-        self._buffer = _Buffer()
+    def __init__(self, capacity: Optional[int] = None):
+        self._buffer = _Buffer() if capacity is None else _PixelsInPlace(capacity)
         self._layout = None
         self._data: Optional[np.ndarray] = None
         self._data_offset = 0
@@ -155,6 +188,15 @@ class SerializedImage:
     def data(self) -> np.ndarray:
         """Return the message's pixel bytes (1-D uint8, `size` of them) to write into."""
         return self._data
+
+    def pixels(self) -> np.ndarray:
+        """Return where the pixel bytes of every layout are (made with a capacity only)."""
+        return self._buffer.pixels
+
+    @property
+    def pixels_address(self) -> int:
+        """Return the address of pixels() (made with a capacity only)."""
+        return self._buffer.pixels_address
 
     def message(self) -> np.ndarray:
         """Return the serialized bytes (1-D uint8) of the whole message, as it is now."""

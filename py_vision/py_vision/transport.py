@@ -32,7 +32,7 @@ docs/transport.md says why.
 
 from dataclasses import dataclass
 import threading
-from typing import Callable, Optional, Tuple
+from typing import Callable, List, Optional, Tuple
 
 import cv2
 import numpy as np
@@ -107,7 +107,9 @@ class ImagePublisher:
     buffer of the publisher's own, reused frame after frame, and the pixels are written into
     it once (by the conversion itself where the caller can convert into it, `into`), then
     handed to the middleware as they are (SerializedPublisher). Where rclpy does not allow that
-    they go out as an Image message holding the pixels, which rclpy copies.
+    they go out as an Image message holding the pixels, which rclpy copies. A camera may write
+    its frames straight into messages of the publisher's own (`frame_buffers()`): a frame
+    published as it was captured (`in_buffer`) then goes out without a copy.
 
     With lazy_raw False the raw image is published whatever its subscribers (a benchmark's
     stream, whose cost must not depend on who listens).
@@ -137,7 +139,27 @@ class ImagePublisher:
         # the image).
         self._fields = None
         self._pixels = None
+        # Messages a camera captures into (frame_buffers), by the camera's buffer index.
+        self._slots: Optional[List[SerializedImage]] = None
         self._lock = threading.Lock()
+
+    def frame_buffers(self, count: int, nbytes: int) -> Optional[List[np.ndarray]]:
+        """
+        Return count arrays of nbytes for a camera to write its frames into, or None.
+
+        Each is the pixel bytes of a raw message of the publisher's own (SerializedImage
+        with a capacity), whose fields are laid out before them: a frame published with
+        in_buffer=index goes out as it was captured, never copied. The same messages are
+        handed out again while count and size allow (the camera that had them is closed by
+        then); None where raw images do not go out serialized.
+        """
+        if not self._serialized.available:
+            return None
+        with self._lock:
+            slots = self._slots
+            if slots is None or len(slots) != count or slots[0].pixels().size < nbytes:
+                self._slots = slots = [SerializedImage(nbytes) for _ in range(count)]
+            return [slot.pixels()[:nbytes] for slot in slots]
 
     def _raw_message(self, pixels: np.ndarray, encoding: str) -> Image:
         """
@@ -154,8 +176,30 @@ class ImagePublisher:
             share_message_data(self._raw_msg, pixels)
         return self._raw_msg
 
-    def _publish_raw(self, header, image, encoding, into) -> bool:
+    def _publish_in_place(self, header, image, encoding, in_buffer) -> bool:
+        """Publish the message a frame was captured into; False where image() is not in it."""
+        slots = self._slots
+        if slots is None or not 0 <= in_buffer < len(slots):
+            return False
+        slot = slots[in_buffer]
+        pixels = image()
+        # The message holds exactly the image's bytes, or its copy goes out instead.
+        if pixels is None or not pixels.flags.c_contiguous or \
+                pixels.__array_interface__['data'][0] != slot.pixels_address:
+            return False
+        self._lay_out(pixels, encoding)
+        try:
+            slot.prepare(header, *self._fields)
+        except ValueError:
+            return False
+        self._serialized.publish_at(*slot.where())
+        return True
+
+    def _publish_raw(self, header, image, encoding, into, in_buffer=None) -> bool:
         """Publish the raw image; False when it is not a whole image (nothing published)."""
+        if in_buffer is not None and self._serialized.available and \
+                self._publish_in_place(header, image, encoding, in_buffer):
+            return True
         if not self._serialized.available:
             pixels = image()
             if pixels is None:
@@ -216,8 +260,8 @@ class ImagePublisher:
     def publish(self, header, image: Callable[[], Optional[np.ndarray]],
                 jpeg: Optional[np.ndarray] = None, encoding: str = 'bgr8',
                 picture: Optional[Callable[[], Optional[np.ndarray]]] = None,
-                into: Optional[Callable[[np.ndarray], Optional[np.ndarray]]] = None
-                ) -> Tuple[bool, bool]:
+                into: Optional[Callable[[np.ndarray], Optional[np.ndarray]]] = None,
+                in_buffer: Optional[int] = None) -> Tuple[bool, bool]:
         """
         Publish one frame with header to the topics that have subscribers.
 
@@ -227,15 +271,18 @@ class ImagePublisher:
         does not fit out, or None as image() does; jpeg is the camera's own JPEG, published as
         it is; picture() returns the 8-bit picture (BGR, or one channel for a grey one) a JPEG
         is encoded from when there is none (image() when not given: `encoding` is bgr8 or
-        mono8 then). Returns (raw published, compressed published).
+        mono8 then); in_buffer, the index of the frame_buffers() array the frame was captured
+        into, if it was (the raw message is that one's where image() is exactly its bytes).
+        Returns (raw published, compressed published).
         """
         with self._lock:
-            return self._publish(header, image, jpeg, encoding, picture, into)
+            return self._publish(header, image, jpeg, encoding, picture, into, in_buffer)
 
-    def _publish(self, header, image, jpeg, encoding, picture, into) -> Tuple[bool, bool]:
+    def _publish(self, header, image, jpeg, encoding, picture, into,
+                 in_buffer) -> Tuple[bool, bool]:
         raw_done = compressed_done = False
         if self.wants_raw() or not self._lazy_raw:
-            if not self._publish_raw(header, image, encoding, into):
+            if not self._publish_raw(header, image, encoding, into, in_buffer):
                 return False, False  # not a whole image (a JPEG that does not decode): no part
             raw_done = True
         if self.wants_compressed():

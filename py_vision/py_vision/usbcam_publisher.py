@@ -327,6 +327,13 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         camera = Camera.open(self.video_device, self.size[0], self.size[1], self.framerate,
                              self.pixel_format, self.output_encoding,
                              synthetic=self._synthetic)
+        if self.output_encoding == 'native' and camera.buffer_bytes and \
+                not camera.pixel_format.compressed:
+            # The camera writes its frames into the raw messages themselves: published as
+            # they come, never copied here (a driver without user memory: its own buffers).
+            buffers = self.images.frame_buffers(camera.buffer_count, camera.buffer_bytes)
+            if buffers is not None:
+                camera.capture_into(buffers)
         where = self.video_device
         if where.strip().lower() == AUTO:
             where = '%s (%s)' % (where, camera.node)
@@ -403,7 +410,8 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
             output, picture = self.output_encoding, frame.pixel_format.picture
             raw, compressed = self.images.publish(
                 header, lambda: frame.image(output), frame.jpeg, frame.encoding(output),
-                lambda: frame.image(picture), lambda out: frame.image(output, out))
+                lambda: frame.image(picture), lambda out: frame.image(output, out),
+                frame.user_buffer)
             self.frames_decoded += frame.decoded
         info = self.calibration.camera_info(camera.width, camera.height)
         info.header = header

@@ -321,7 +321,9 @@ class EmulatedCamera:
     `stalled` and `denied` (start with that fault), `corrupt_every` (overrides the data
     file's broken-JPEG period; 0: never), `drop_every` (every N-th frame lost on the way: the
     buffers' sequence skips it), `error_every` (every N-th buffer comes back flagged
-    V4L2_BUF_FLAG_ERROR, empty), `streamon_errno` (VIDIOC_STREAMON fails with that errno) and
+    V4L2_BUF_FLAG_ERROR, empty), `streamon_errno` (VIDIOC_STREAMON fails with that errno),
+    `no_userptr` (True or 'reqbufs': VIDIOC_REQBUFS refuses V4L2_MEMORY_USERPTR, as a driver
+    without it does; 'qbuf': VIDIOC_QBUF refuses the memory, EFAULT) and
     `usb_controller` (the PCI address of its USB host controller, 0000:00:14.0 by default:
     the cameras of one state directory on one controller share its bus's bandwidth).
     `close()` unplugs it and removes its directory (the
@@ -331,7 +333,7 @@ class EmulatedCamera:
     def __init__(self, state_dir, model='webcam_1080p', node=40, **faults):
         unknown = set(faults) - set(_FAULTS) - {'serial', 'corrupt_every', 'usb_port',
                                                 'drop_every', 'error_every', 'streamon_errno',
-                                                'usb_controller'}
+                                                'usb_controller', 'no_userptr'}
         if unknown:
             raise TypeError('unknown option(s) %s' % ', '.join(sorted(unknown)))
         self.model = load_model(model)
@@ -376,7 +378,9 @@ class EmulatedCamera:
                  'corrupt_mode %s' % corrupt.get('mode', 'truncate'),
                  'drop_every %d' % int(faults.get('drop_every', 0)),
                  'error_every %d' % int(faults.get('error_every', 0)),
-                 'streamon_errno %d' % int(faults.get('streamon_errno', 0))]
+                 'streamon_errno %d' % int(faults.get('streamon_errno', 0)),
+                 'no_userptr %d' % {None: 0, False: 0, True: 1, 'reqbufs': 1, 'qbuf': 2}[
+                     faults.get('no_userptr')]]
         if self.bus is not None:
             lines += ['bus %d %d %s' % (self.bus_key, m.get('usb_compressed_payload',
                                                             _USB_COMPRESSED_PAYLOAD), self.bus),

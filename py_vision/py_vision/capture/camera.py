@@ -29,7 +29,7 @@ they reach it.
 
 import errno
 import os
-from typing import Dict, List, Mapping, Optional, Tuple
+from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 import cv2
 import numpy as np
@@ -40,8 +40,8 @@ from py_vision.capture.pixel_formats import COLOUR_OUTPUTS, find, FORMATS, Pixel
 from py_vision.capture.source import (
     BusFull, Clock, Frame, FrameFormat, FrameSource, MONOTONIC, SourceError, StreamFormat)
 from py_vision.capture.synthetic_device import SyntheticDevices
-from py_vision.capture.v4l2 import V4L2Error
-from py_vision.capture.v4l2_stream import V4L2Source
+from py_vision.capture.v4l2 import MEMORY_USERPTR, V4L2Error
+from py_vision.capture.v4l2_stream import BUFFERS, V4L2Source
 from py_vision.capture.video_file import video_file_support, VideoFileSource
 
 __all__ = ['Camera', 'open_source', 'pixel_format_accepted']
@@ -240,6 +240,35 @@ class Camera:
                 and not frame.corrupt:
             frame.corrupt = not self._whole_jpeg(frame.data)
         return frame
+
+    @property
+    def buffer_bytes(self) -> int:
+        """Return the bytes of an array capture_into() takes (0: a source that takes none)."""
+        return self.source.buffer_bytes if isinstance(self.source, V4L2Source) else 0
+
+    @property
+    def io_method(self) -> str:
+        """Return how frames reach the program: 'mmap', 'userptr' (V4L2) or '' (others)."""
+        if not isinstance(self.source, V4L2Source):
+            return ''
+        return 'userptr' if self.source.memory == MEMORY_USERPTR else 'mmap'
+
+    @property
+    def buffer_count(self) -> int:
+        """Return how many arrays capture_into() takes: one for each buffer the camera has."""
+        return BUFFERS
+
+    def capture_into(self, arrays: Optional[Sequence[np.ndarray]]) -> bool:
+        """
+        Offer the camera memory to write its frames into, before start() (None: its own).
+
+        Each array 1-D, writable uint8 of `buffer_bytes`; a frame written there names its
+        array (`Frame.user_buffer`). False where the camera cannot (not a V4L2 device, or the
+        arrays do not fit); a driver that refuses them at start() uses its own buffers.
+        """
+        if self.streaming:
+            raise RuntimeError('capture_into() while streaming')
+        return self.source.capture_into(arrays)
 
     def formats(self) -> List[FrameFormat]:
         """Return the pixel formats, sizes and rates the device offers (none for a file)."""

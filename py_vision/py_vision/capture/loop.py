@@ -85,6 +85,7 @@ class CaptureStats:
     fps: float = 0.0         # the rate the device was set to
     measured_fps: float = 0.0  # the rate frames arrived at over the last second or so
     waiting: str = ''        # why the open device does not stream now (BusFull), in one line
+    io_method: str = ''      # how the stream's frames reach us: mmap, userptr ('': not V4L2)
 
 
 class CaptureLoop:
@@ -155,6 +156,7 @@ class CaptureLoop:
                 self._set_camera(self._open_camera())
             try:
                 self._camera.start()
+                self._update(io_method=self._camera.io_method)
             except BusFull as error:
                 # Not an error of the configuration: the capture thread waits for room.
                 self._log.warning(str(error))
@@ -382,6 +384,7 @@ class CaptureLoop:
             try:
                 with self._lock:
                     camera.start()
+                self._update(io_method=camera.io_method)
             except BusFull as error:
                 now = self._clock.now()
                 if now - last_log >= self._timing.log_period_s:
@@ -419,6 +422,7 @@ class CaptureLoop:
                     self._set_camera(camera)
                     try:
                         camera.start()
+                        self._update(io_method=camera.io_method)
                     except BusFull as error:
                         self._log.warning(str(error))   # _wait_for_room goes on from here
                         self._update(waiting=str(error))

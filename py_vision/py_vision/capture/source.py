@@ -25,11 +25,14 @@ A frame's bytes may be the device's own buffer: they are valid until the next `n
 (or `stop()`), which gives the buffer back. Besides, a source says what it offers
 (`FrameFormat`), its controls (`ControlInfo`, read from the device at each call) and sets
 them by V4L2 id; `interrupt()` ends a `next_frame()` waiting in another thread.
+`capture_into(arrays)` offers memory of the caller's own for the device to write frames
+into (a V4L2 driver that takes user memory): False where the source cannot; a frame written
+there names its array (`Frame.user_buffer`).
 """
 
 from dataclasses import dataclass, field
 import time
-from typing import Dict, List, Optional, Protocol, Tuple
+from typing import Dict, List, Optional, Protocol, Sequence, Tuple
 
 import numpy as np
 from py_vision.capture.controls import ControlInfo
@@ -162,6 +165,7 @@ class Frame:
     error: bool = False                     # flagged by the driver (V4L2_BUF_FLAG_ERROR)
     corrupt: bool = False                   # not a whole image: never to be published
     decoded: bool = False                   # image() had to decode a JPEG
+    user_buffer: Optional[int] = None       # which capture_into() array its bytes are in
     _images: Optional[Dict[str, np.ndarray]] = field(default=None, repr=False)
 
     @property
@@ -214,6 +218,8 @@ class FrameSource(Protocol):
     def stop(self) -> None: ...  # noqa: D102
 
     def next_frame(self) -> Optional[Frame]: ...  # noqa: D102
+
+    def capture_into(self, arrays: Optional[Sequence[np.ndarray]]) -> bool: ...  # noqa: D102
 
     def interrupt(self) -> None: ...  # noqa: D102
 

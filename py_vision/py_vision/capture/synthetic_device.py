@@ -360,6 +360,10 @@ class SyntheticCamera:
         """Stop streaming: the next frame starts a new schedule (the ones between are missed)."""
         self._pacer.restart()
 
+    def capture_into(self, arrays) -> bool:
+        """Return False: frames are made in memory of the source's own."""
+        return False
+
     def next_frame(self) -> Optional[Frame]:
         """Wait for the next frame; return it as sent (valid until the next call), or None."""
         if not self.grab():

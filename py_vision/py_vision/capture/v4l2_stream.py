@@ -14,7 +14,7 @@
 
 
 """
-V4L2 cameras streamed by py_vision itself: memory-mapped buffers, one frame at a time.
+V4L2 cameras streamed by py_vision itself: mapped or user buffers, one frame at a time.
 
 `V4L2Source` is the FrameSource of a V4L2 capture device. `configure` sets the pixel format
 and size (VIDIOC_S_FMT) and the frame interval (VIDIOC_S_PARM) and reads back what the driver
@@ -26,9 +26,17 @@ poll() for a filled buffer and takes it (VIDIOC_DQBUF), handing out a view of it
 next `next_frame()`, so a frame is converted straight from the driver's memory and never
 copied on the way. `stop` ends the stream (VIDIOC_STREAMOFF) and keeps the device, its buffers
 and its controls, so that `start` resumes at once and nobody else can take the camera
-meanwhile; `release` gives everything back. The device is polled only while it has buffers:
-a poll on a queue without any starts the read() emulation of a driver that offers read I/O
-(vivid does; uvcvideo does not), which allocates buffers of its own and makes S_FMT EBUSY.
+meanwhile; `release` gives everything back.
+
+`capture_into(arrays)` hands the device memory of the program's own to write frames into
+(V4L2_MEMORY_USERPTR): the pixel bytes of the messages that go out, so that a frame published
+as the camera sent it is never copied by the program. A driver that does not take user memory
+(REQBUFS or QBUF refuse it) streams into its own mapped buffers instead, as without it; a frame
+in user memory says which array it is in (`Frame.user_buffer`).
+
+The device is polled only while it has buffers: a poll on a queue without any starts the
+read() emulation of a driver that offers read I/O (vivid does; uvcvideo does not), which
+allocates buffers of its own and makes S_FMT EBUSY.
 
 Structures are laid out from include/uapi/linux/videodev2.h with the machine's own alignment
 (`struct v4l2_buffer` holds a `struct timeval` of two longs and a union with a pointer: 88
@@ -42,15 +50,15 @@ import mmap
 import os
 import select
 import struct
-from typing import List, Optional
+from typing import List, Optional, Sequence
 
 import numpy as np
 from py_vision.capture.controls import ControlInfo
 from py_vision.capture.pixel_formats import fourcc_text, PixelFormat
 from py_vision.capture.source import Frame, FrameFormat, StreamFormat
 from py_vision.capture.v4l2 import (
-    _ioc, _REQBUFS, BUF_TYPE_VIDEO_CAPTURE, CAP_VIDEO_CAPTURE, MEMORY_MMAP, open_problem,
-    V4L2Device, V4L2Error, VIDIOC_REQBUFS)
+    _ioc, _REQBUFS, BUF_TYPE_VIDEO_CAPTURE, CAP_VIDEO_CAPTURE, MEMORY_MMAP, MEMORY_USERPTR,
+    open_problem, V4L2Device, V4L2Error, VIDIOC_REQBUFS)
 
 __all__ = ['STREAM_PROBLEMS', 'V4L2Source']
 
@@ -89,16 +97,24 @@ _MEMORY_AT = struct.calcsize('@5Ill2I8BI')
 _DEQUEUED = struct.Struct('@I4xII4xll16xI')
 
 
-def _buffer_for(index: int) -> bytes:
-    """Return a struct v4l2_buffer asking for buffer `index` of the capture queue, mmap'd."""
+def _buffer_for(index: int, memory: int = MEMORY_MMAP, address: int = 0,
+                length: int = 0) -> bytes:
+    """
+    Return a struct v4l2_buffer naming buffer `index` of the capture queue.
+
+    mmap'd, or (MEMORY_USERPTR) the program's memory of length bytes at address.
+    """
     buffer = bytearray(_BUFFER.size)
     struct.pack_into('=II', buffer, 0, index, BUF_TYPE_VIDEO_CAPTURE)
-    struct.pack_into('=I', buffer, _MEMORY_AT, MEMORY_MMAP)
+    struct.pack_into('=I', buffer, _MEMORY_AT, memory)
+    if memory == MEMORY_USERPTR:
+        struct.pack_into('@LI', buffer, _BUFFER_M_AT, address, length)
     return bytes(buffer)
 
 
+# Where the union m (then length) lies in struct v4l2_buffer.
+_BUFFER_M_AT = struct.calcsize('@5Ill2I8B2I0L')
 _BUFFERS = [_buffer_for(index) for index in range(32)]   # VIDEO_MAX_FRAME buffers at most
-_DEQUEUE = _BUFFERS[0]
 _STREAM_TYPE = struct.pack('=I', BUF_TYPE_VIDEO_CAPTURE)
 
 # Why a stream does not start, by errno, where open_problem's words would not tell a user.
@@ -131,12 +147,17 @@ class V4L2Source:
         self._fd = self.device.fd
         self._maps: List[mmap.mmap] = []
         self._arrays: List[np.ndarray] = []     # each buffer's bytes, made once
+        self._user: Optional[List[np.ndarray]] = None   # capture_into()'s memory
+        self.memory = MEMORY_MMAP               # how the buffers there are: mmap or user
+        self._queue_as: List[bytes] = _BUFFERS  # each buffer's struct v4l2_buffer for QBUF
+        self._dequeue_as = _BUFFERS[0]
         self._held: Optional[int] = None        # the buffer the last frame's bytes are in
         self._streaming = False
         self._queued = False    # every buffer is with the driver (a STREAMON that failed)
         self._format: Optional[StreamFormat] = None
         self._pixel_format: Optional[PixelFormat] = None
         self._timeout = 1.0
+        self.buffer_bytes = 0    # a frame's buffer, as the driver sizes it (sizeimage)
         self._whole = 0          # the bytes of a whole raw frame (0: compressed)
         self._wake_read, self._wake_write = os.pipe2(os.O_NONBLOCK | os.O_CLOEXEC)
         self._poll = select.epoll()
@@ -169,7 +190,8 @@ class V4L2Source:
             fcntl.ioctl(self._fd, VIDIOC_S_FMT, request)
         except OSError as error:
             raise V4L2Error(open_problem(error.errno), error.errno) from None
-        _, width, height, code, _, bytesperline, *_ = _FORMAT.unpack(request)
+        _, width, height, code, _, bytesperline, sizeimage, *_ = _FORMAT.unpack(request)
+        self.buffer_bytes = sizeimage
         rate = self._set_rate(fps)
         self.device.forget_controls()  # a driver may change ranges with the format or rate
         self._format = StreamFormat(fourcc_text(code), width, height, rate or fps, bytesperline)
@@ -198,12 +220,35 @@ class V4L2Source:
 
     # --- streaming ------------------------------------------------------------------------
 
+    def capture_into(self, arrays: Optional[Sequence[np.ndarray]]) -> bool:
+        """
+        Have the device write frames into arrays (USERPTR) from the next start() on.
+
+        Each array 1-D, writable, contiguous uint8 of at least `buffer_bytes` (the driver's
+        sizeimage, from configure()): one buffer each, two at least. None: the device's own
+        mapped buffers again. The buffers of a stopped stream are given back first. True
+        when the arrays will be tried (a driver may still refuse them at start(): mapped
+        buffers then); False when they do not fit (nothing changes then).
+        """
+        if self._streaming:
+            raise RuntimeError('capture_into() while streaming')
+        if arrays is not None:
+            arrays = list(arrays)
+            if len(arrays) < 2 or len(arrays) > len(_BUFFERS) or not all(
+                    isinstance(a, np.ndarray) and a.ndim == 1 and a.dtype == np.uint8
+                    and a.flags.c_contiguous and a.flags.writeable
+                    and a.size >= max(self.buffer_bytes, 1) for a in arrays):
+                return False
+        self._free_buffers()
+        self._user = arrays
+        return True
+
     def start(self) -> None:
         """Start streaming: buffers asked for and mapped once, all queued; V4L2Error if not."""
         if self._streaming:
             return
-        if not self._maps:
-            self._map_buffers()
+        if not self._arrays:
+            self._map_buffers(user=self._user is not None)
         if not self._polled:
             # Polled only once it has buffers: polling a queue without any starts the read()
             # emulation of a driver that has read I/O (vivid), which takes the queue.
@@ -213,10 +258,22 @@ class V4L2Source:
         # queued: queued again, they would be refused.
         if not self._queued:
             try:
-                for index in range(len(self._maps)):
+                for index in range(len(self._arrays)):
                     self._queue(index)
             except OSError as error:
-                raise _stream_error('VIDIOC_QBUF', error) from None
+                if self.memory != MEMORY_USERPTR:
+                    raise _stream_error('VIDIOC_QBUF', error) from None
+                # A driver that takes no user memory after all (its buffers must be
+                # physically contiguous, say): its own mapped buffers then.
+                self._free_buffers()
+                self._map_buffers(user=False)
+                self._poll.register(self._fd, select.EPOLLIN)
+                self._polled = True
+                try:
+                    for index in range(len(self._arrays)):
+                        self._queue(index)
+                except OSError as error:
+                    raise _stream_error('VIDIOC_QBUF', error) from None
             self._queued = True
         try:
             fcntl.ioctl(self._fd, VIDIOC_STREAMON, _STREAM_TYPE)
@@ -225,7 +282,11 @@ class V4L2Source:
         self._held = None
         self._streaming = True
 
-    def _map_buffers(self):
+    def _map_buffers(self, user: bool):
+        if user and self._user_buffers():
+            return
+        self.memory = MEMORY_MMAP
+        self._queue_as, self._dequeue_as = _BUFFERS, _BUFFERS[0]
         request = bytearray(_REQBUFS.pack(BUFFERS, BUF_TYPE_VIDEO_CAPTURE, MEMORY_MMAP, 0, 0))
         try:
             fcntl.ioctl(self._fd, VIDIOC_REQBUFS, request)
@@ -248,8 +309,28 @@ class V4L2Source:
             self._free_buffers()
             raise _stream_error('mapping the buffers', error) from None
 
+    def _user_buffers(self) -> bool:
+        """Ask for capture_into()'s arrays as the buffers (USERPTR); False if refused."""
+        arrays = self._user
+        request = bytearray(_REQBUFS.pack(len(arrays), BUF_TYPE_VIDEO_CAPTURE, MEMORY_USERPTR,
+                                          0, 0))
+        try:
+            fcntl.ioctl(self._fd, VIDIOC_REQBUFS, request)
+        except OSError:
+            return False   # no user memory for this driver (EINVAL): mapped buffers
+        count = _REQBUFS.unpack(request)[0]
+        if not 2 <= count <= len(arrays):
+            self._give_back(MEMORY_USERPTR)
+            return False
+        self.memory = MEMORY_USERPTR
+        self._arrays = arrays[:count]
+        self._queue_as = [_buffer_for(index, MEMORY_USERPTR, array.ctypes.data, array.size)
+                          for index, array in enumerate(self._arrays)]
+        self._dequeue_as = self._queue_as[0]
+        return True
+
     def _queue(self, index: int) -> None:
-        fcntl.ioctl(self._fd, VIDIOC_QBUF, bytearray(_BUFFERS[index]))
+        fcntl.ioctl(self._fd, VIDIOC_QBUF, bytearray(self._queue_as[index]))
 
     def stop(self) -> None:
         """Stop streaming (VIDIOC_STREAMOFF); the device, its buffers and controls are kept."""
@@ -278,10 +359,10 @@ class V4L2Source:
         if self._held is not None:
             held, self._held = self._held, None
             try:
-                fcntl.ioctl(fd, VIDIOC_QBUF, bytearray(_BUFFERS[held]))
+                fcntl.ioctl(fd, VIDIOC_QBUF, bytearray(self._queue_as[held]))
             except OSError:
                 return None
-        timeout, buffer = self._timeout, bytearray(_DEQUEUE)
+        timeout, buffer = self._timeout, bytearray(self._dequeue_as)
         for _ in range(100):
             events = self._poll.poll(timeout)
             if not events or any(ready == self._wake_read for ready, _ in events):
@@ -315,7 +396,8 @@ class V4L2Source:
         self._held = index
         data = self._arrays[index][:used]    # no more than the buffer, if bytesused says more
         return Frame(sequence, captured, self._pixel_format, stream.width, stream.height,
-                     data, stream.bytesperline, corrupt=len(data) < self._whole)
+                     data, stream.bytesperline, corrupt=len(data) < self._whole,
+                     user_buffer=index if self.memory == MEMORY_USERPTR else None)
 
     def _queue_back(self, index: int) -> None:
         try:
@@ -347,8 +429,10 @@ class V4L2Source:
         if self._polled:
             self._poll.unregister(self._fd)
             self._polled = False
-        if not self._maps:
+        if not self._arrays:
             return
+        # The driver lets go of user memory first: the arrays may go after that.
+        self._give_back(self.memory)
         self._arrays = []
         for mapped in self._maps:
             try:
@@ -356,8 +440,11 @@ class V4L2Source:
             except BufferError:
                 pass   # a frame still holds a view: unmapped when it goes
         self._maps = []
+
+    def _give_back(self, memory: int) -> None:
+        """Free the driver's buffers (REQBUFS with a count of 0)."""
         try:
             fcntl.ioctl(self._fd, VIDIOC_REQBUFS, bytearray(_REQBUFS.pack(
-                0, BUF_TYPE_VIDEO_CAPTURE, MEMORY_MMAP, 0, 0)))
+                0, BUF_TYPE_VIDEO_CAPTURE, memory, 0, 0)))
         except OSError:
             pass

@@ -144,6 +144,10 @@ class VideoFileSource:
     def stop(self) -> None:
         """Pause: playing goes on from the same frame."""
 
+    def capture_into(self, arrays) -> bool:
+        """Return False: frames are made in memory of the source's own."""
+        return False
+
     def next_frame(self) -> Optional[Frame]:
         """Wait until the next frame is due and return it (BGR), or None when the file fails."""
         if not self.grab():

@@ -107,6 +107,50 @@ def test_every_raw_format_streams_as_the_camera_sends_it(emulated_camera):
                        'RGGB': 'bayer_rggb8'}
 
 
+USER_MEMORY = """
+import json, sys
+import numpy as np
+from py_vision.capture import Camera
+from py_vision.capture.synthetic_picture import read_frame_index
+camera = Camera.open(sys.argv[1], 320, 240, 30.0, 'yuyv', 'native')
+arrays = [np.zeros(camera.buffer_bytes, np.uint8) for _ in range(camera.buffer_count)]
+assert camera.capture_into(arrays)
+camera.start()
+for _ in range(6):
+    frame = camera.read()
+    inside = [i for i, a in enumerate(arrays) if np.shares_memory(a, frame.data)]
+    print(json.dumps({'user_buffer': frame.user_buffer, 'inside': inside,
+                      'index': read_frame_index(frame.image('bgr8')),
+                      'sent': frame.data.tobytes().hex()}), flush=True)
+camera.release()
+"""
+
+
+@pytest.mark.parametrize('no_userptr', [False, 'reqbufs', 'qbuf'])
+def test_frames_are_captured_into_memory_the_program_gives(emulated_camera, no_userptr):
+    # uvcvideo takes user memory (V4L2_MEMORY_USERPTR): the camera writes each frame where
+    # the program wants it (the message it publishes); a driver without it (REQBUFS EINVAL),
+    # or one that cannot use the memory it is given (QBUF EFAULT), streams into its own
+    # buffers instead, the same frames.
+    camera = emulated_camera(model='vga_yuyv', no_userptr=no_userptr)
+    result = subprocess.run([sys.executable, '-c', USER_MEMORY, camera.device],
+                            env=camera_env(camera), capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 0, result.stderr[-3000:]
+    frames = [json.loads(line) for line in result.stdout.splitlines()]
+    assert len(frames) == 6
+    for frame in frames:
+        assert frame['index'] is not None
+        assert bytes.fromhex(frame['sent']) == expected_yuyv(frame['index'], *SIZE).tobytes()
+        if no_userptr:
+            assert (frame['user_buffer'], frame['inside']) == (None, [])
+        else:
+            assert frame['inside'] == [frame['user_buffer']]
+    if not no_userptr:   # every buffer used in turn, none twice in a row
+        buffers = [frame['user_buffer'] for frame in frames]
+        assert len(set(buffers)) >= 2 and all(a != b for a, b in zip(buffers, buffers[1:]))
+
+
 def start(launch, camera, ros_env, **params):
     params.setdefault('video_device', camera.device)
     return launch('usbcam_publisher', params=params, env=camera.env(ros_env))
@@ -175,6 +219,28 @@ def test_a_camera_that_sends_neither_yuyv_nor_mjpeg_publishes_any_output(
 
 def stamp_s(msg):
     return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+
+
+@pytest.mark.parametrize('no_userptr', [False, 'reqbufs', 'qbuf'])
+def test_native_frames_are_the_cameras_bytes_with_or_without_user_memory(
+        launch, peer, emulated_camera, ros_env, no_userptr):
+    # With user memory the node publishes the message the camera wrote into; without, a copy.
+    camera = emulated_camera(model='vga_yuyv', no_userptr=no_userptr)
+    frames = peer.collect(Image, 'usb_camera/image', RELIABLE)
+    status = CameraStatus(peer)
+    start(launch, camera, ros_env, image_width=320, image_height=240, framerate=30.0,
+          output_encoding='native', frame_id='a_frame_id_longer_than_the_first')
+    wait_until(lambda: len(frames) >= 8, 30, what='8 frames')
+    _, values = status.wait_reports()
+    assert values['io method'] == ('mmap' if no_userptr else 'userptr'), values
+    indexes = []
+    for msg in list(frames)[:8]:
+        assert (msg.encoding, msg.width, msg.height, msg.step) == ('yuv422_yuy2', 320, 240, 640)
+        assert msg.header.frame_id == 'a_frame_id_longer_than_the_first'
+        index = read_frame_index(BRIDGE.imgmsg_to_cv2(msg, 'bgr8'))
+        assert bytes(msg.data) == expected_yuyv(index, *SIZE).tobytes()
+        indexes.append(index)
+    assert indexes == sorted(set(indexes)), 'each frame once, in order'
 
 
 def test_stamps_are_the_buffers_capture_times(launch, peer, emulated_camera, ros_env):

@@ -159,6 +159,36 @@ def test_a_camera_info_follows_its_stamp_frame_id_and_replacement():
     assert deserialize_message(serialized.message(replaced).tobytes(), CameraInfo) == replaced
 
 
+def test_pixels_given_a_capacity_stay_in_place_through_every_layout():
+    """A camera writes into pixels() once; every layout's message is still rclpy's."""
+    serialized = SerializedImage(64 * 48 * 2)
+    pixels, address = serialized.pixels(), serialized.pixels_address
+    assert address % 4096 == 0 and pixels.size == 64 * 48 * 2
+    rng = np.random.default_rng(3)
+    for frame_id, (width, height), encoding, step in (
+            ('cam', (64, 48), 'yuv422_yuy2', 128),
+            ('a_much_longer_frame_id', (64, 48), 'yuv422_yuy2', 128),
+            ('', (32, 16), 'mono8', 33), ('camera_é', (64, 48), 'rgb8', 64)):
+        data = rng.integers(0, 256, step * height, np.uint8)
+        pixels[:data.size] = data          # the camera's bytes, where it wrote them
+        head = header(frame_id, width, height)
+        serialized.prepare(head, height, width, encoding, step)
+        assert serialized.data().ctypes.data == address, 'the pixels moved'
+        assert serialized.where()[0] + serialized.where()[1] == address + data.size
+        expected = reference(head, height, width, encoding, step, False, data.tobytes())
+        assert deserialize_message(serialized.message().tobytes(), Image) == expected
+
+
+def test_a_layout_that_does_not_fit_around_the_pixels_is_refused():
+    serialized = SerializedImage(100)
+    with pytest.raises(ValueError, match='does not fit'):
+        serialized.prepare(header(), 11, 10, 'mono8', 10)        # 110 bytes of pixels
+    with pytest.raises(ValueError, match='does not fit'):
+        serialized.prepare(header('f' * 5000), 10, 10, 'mono8', 10)   # fields over a page
+    serialized.prepare(header('f' * 4000), 10, 10, 'mono8', 10)
+    assert serialized.data().ctypes.data == serialized.pixels_address
+
+
 @pytest.fixture(scope='module')
 def node():
     """Give the tests a node of their own on a ROS domain of their own."""
@@ -250,6 +280,38 @@ def test_image_publisher_sends_what_the_bridge_makes_of_the_frames(node, fourcc,
     # Converted into the message when the frame has the last one's size (a new frame_id moves
     # the pixels, not their shape); into an array of its own, then copied, when not.
     assert written_in_place == [True, False, False, True]
+
+
+def test_frames_captured_into_the_publishers_messages_go_out_as_they_are(node):
+    """The camera's writing into frame_buffers() (USERPTR): published without a copy."""
+    images = ImagePublisher(Parameters(node), 'in_place', RELIABLE, CvBridge())
+    nbytes = 32 * 16 * 2
+    buffers = images.frame_buffers(4, nbytes)
+    assert len(buffers) == 4 and all(b.size == nbytes and b.flags.writeable for b in buffers)
+    assert images.frame_buffers(4, nbytes)[2].ctypes.data == buffers[2].ctypes.data, \
+        'the same messages handed out again'
+    bridge, sent, copies = CvBridge(), [], []
+
+    def publish(index):
+        frame = frame_of('YUYV', 32, 16, index)
+        buffer = index % 4
+        buffers[buffer][:] = frame.data       # where the camera wrote the frame
+        if index == 5:    # a frame in a buffer that is not one of the messages' any more
+            captured = Frame(index, None, frame.pixel_format, 32, 16, frame.data)
+        else:
+            captured = Frame(index, None, frame.pixel_format, 32, 16, buffers[buffer],
+                             user_buffer=buffer)
+        expected = bridge.cv2_to_imgmsg(frame.image('native').copy(), 'yuv422_yuy2')
+        expected.header = header('cam' if index < 3 else 'camera_frame', index)
+        sent.append(expected)
+
+        def into(out):
+            copies.append(index)
+            return captured.image('native', out)
+        assert images.publish(expected.header, lambda: captured.image('native'), None,
+                              'yuv422_yuy2', None, into, captured.user_buffer) == (True, False)
+    assert receive(node, 'in_place', 6, publish) == sent
+    assert copies == [5], 'only the frame outside the messages was copied'
 
 
 def test_image_publisher_copies_pixels_it_cannot_convert_into(node):

@@ -212,6 +212,8 @@ struct camera {
     uint32_t drop_every;                   /* every n-th frame lost on the way (no buffer) */
     uint32_t error_every;                  /* every n-th buffer flagged V4L2_BUF_FLAG_ERROR */
     int streamon_errno;                    /* what VIDIOC_STREAMON fails with (0: it works) */
+    int no_userptr;                        /* 1: REQBUFS refuses V4L2_MEMORY_USERPTR (EINVAL),
+                                              2: QBUF refuses its memory (EFAULT) */
     struct shared_state *state;
     struct served_record *served;          /* SERVED_SLOTS, or NULL: no served file */
     /* JPEG */
@@ -241,6 +243,8 @@ struct buffer {
     int error;                             /* flagged V4L2_BUF_FLAG_ERROR */
     uint32_t crc, flags;                   /* its CRC-32 and SERVED_CORRUPT */
     uint64_t index;                        /* the sensor's index of the frame */
+    uint8_t *user;                         /* USERPTR: the program's memory, as queued */
+    size_t user_length;
 };
 
 struct handle {
@@ -262,6 +266,7 @@ struct handle {
     size_t stride;
     int memfd;
     uint8_t *mem;
+    uint32_t memory;                       /* V4L2_MEMORY_MMAP or V4L2_MEMORY_USERPTR */
     struct buffer buffers[MAX_BUFFERS];
     uint32_t queued[MAX_BUFFERS], n_queued;
     uint32_t done[MAX_BUFFERS], n_done;
@@ -430,6 +435,8 @@ static void load_camera(const char *dir)
             cam->drop_every = (uint32_t)strtoul(rest, NULL, 10);
         } else if (!strcmp(line, "error_every")) {
             cam->error_every = (uint32_t)strtoul(rest, NULL, 10);
+        } else if (!strcmp(line, "no_userptr")) {
+            cam->no_userptr = (int)strtol(rest, NULL, 10);
         } else if (!strcmp(line, "streamon_errno")) {
             cam->streamon_errno = (int)strtol(rest, NULL, 10);
         } else if (!strcmp(line, "planes") && fmt) {
@@ -833,6 +840,7 @@ static int open_device(struct camera *cam, int flags)
     h->cam = cam;
     h->generation = __atomic_load_n(&cam->state->generation, __ATOMIC_ACQUIRE);
     h->memfd = -1;
+    h->memory = V4L2_MEMORY_MMAP;
     h->nonblock = (flags & O_NONBLOCK) != 0;
     pthread_mutex_init(&h->lock, NULL);
     pthread_cond_init(&h->cond, NULL);
@@ -1583,12 +1591,19 @@ static uint32_t render_clip(struct handle *h, uint8_t *out, size_t cap, uint64_t
     return length;
 }
 
+/* Where buffer b's bytes are: our mapping (MMAP) or the program's memory (USERPTR). */
+static uint8_t *buffer_memory(struct handle *h, uint32_t b)
+{
+    return h->memory == V4L2_MEMORY_USERPTR ? h->buffers[b].user
+                                            : h->mem + (size_t)b * h->stride;
+}
+
 static uint32_t render_frame(struct handle *h, uint32_t b, uint64_t index)
 {
     struct camera *cam = h->cam;
     const struct format_desc *fmt = &cam->formats[h->fmt];
     const struct frame_desc *fd = &fmt->frames[h->frame];
-    uint8_t *out = h->mem + (size_t)b * h->stride;
+    uint8_t *out = buffer_memory(h, b);
     if (fmt->clip_path[0])
         return render_clip(h, out, fd->sizeimage, index);
     if (fmt->fourcc == V4L2_PIX_FMT_MJPEG && cam->have_tables)
@@ -1695,7 +1710,7 @@ static void *producer(void *arg)
         const struct format_desc *made = &h->cam->formats[h->fmt];
         int jpeg = !error && h->cam->served && (made->clip_path[0] || (h->cam->have_tables
             && made->fourcc == V4L2_PIX_FMT_MJPEG));
-        uint32_t crc = jpeg ? crc32_of(h->mem + (size_t)b * h->stride, used) : 0;
+        uint32_t crc = jpeg ? crc32_of(buffer_memory(h, b), used) : 0;
         struct timeval tv = {(time_t)due, (suseconds_t)((due - (time_t)due) * 1e6)};
         pthread_mutex_lock(&h->lock);
         struct buffer *buf = &h->buffers[b];
@@ -2189,7 +2204,10 @@ static int try_format(struct handle *h, struct v4l2_format *f, uint32_t *fi, uin
 
 static int request_buffers(struct handle *h, struct v4l2_requestbuffers *rb)
 {
-    if (rb->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || rb->memory != V4L2_MEMORY_MMAP)
+    /* uvcvideo's queue takes MMAP, USERPTR and DMABUF; the emulation MMAP and USERPTR. */
+    int user = rb->memory == V4L2_MEMORY_USERPTR;
+    if (rb->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || !(rb->memory == V4L2_MEMORY_MMAP
+            || (user && h->cam->no_userptr != 1)))
         return EINVAL;
     int err = acquire(h);
     if (err)
@@ -2197,7 +2215,8 @@ static int request_buffers(struct handle *h, struct v4l2_requestbuffers *rb)
     if (h->streaming)
         return EBUSY;
     free_buffers(h);
-    rb->capabilities = V4L2_BUF_CAP_SUPPORTS_MMAP;
+    rb->capabilities = V4L2_BUF_CAP_SUPPORTS_MMAP
+        | (h->cam->no_userptr == 1 ? 0 : V4L2_BUF_CAP_SUPPORTS_USERPTR);
     if (rb->count == 0) {
         release_owner(h);
         return 0;
@@ -2208,6 +2227,9 @@ static int request_buffers(struct handle *h, struct v4l2_requestbuffers *rb)
     size_t page = (size_t)sysconf(_SC_PAGESIZE);
     size_t size = h->cam->formats[f].frames[fr].sizeimage;
     h->stride = (size + page - 1) / page * page;
+    h->memory = rb->memory;
+    if (user)
+        goto counted;   /* the program brings the memory, buffer by buffer at QBUF */
     h->memfd = memfd_create("uvc-emulator", MFD_CLOEXEC);
     if (h->memfd < 0 || ftruncate(h->memfd, (off_t)(h->stride * count)) != 0) {
         free_buffers(h);
@@ -2219,6 +2241,7 @@ static int request_buffers(struct handle *h, struct v4l2_requestbuffers *rb)
         free_buffers(h);
         return ENOMEM;
     }
+counted:
     h->n_buffers = count;
     for (uint32_t i = 0; i < count; i++) {
         memset(&h->buffers[i], 0, sizeof(h->buffers[i]));
@@ -2237,12 +2260,17 @@ static void fill_buffer(struct handle *h, uint32_t i, struct v4l2_buffer *b)
     memset(b, 0, sizeof(*b));
     b->index = i;
     b->type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    b->memory = V4L2_MEMORY_MMAP;
-    b->m.offset = (uint32_t)(i * h->stride);
-    b->length = h->cam->formats[h->fmt].frames[h->frame].sizeimage;
+    b->memory = h->memory;
+    if (h->memory == V4L2_MEMORY_USERPTR) {
+        b->m.userptr = (unsigned long)buf->user;
+        b->length = (uint32_t)buf->user_length;
+    } else {
+        b->m.offset = (uint32_t)(i * h->stride);
+        b->length = h->cam->formats[h->fmt].frames[h->frame].sizeimage;
+    }
     b->field = V4L2_FIELD_NONE;
-    b->flags = V4L2_BUF_FLAG_MAPPED | V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC
-        | V4L2_BUF_FLAG_TSTAMP_SRC_SOE;
+    b->flags = (h->memory == V4L2_MEMORY_MMAP ? V4L2_BUF_FLAG_MAPPED : 0)
+        | V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC | V4L2_BUF_FLAG_TSTAMP_SRC_SOE;
     if (buf->state == BUF_QUEUED)
         b->flags |= V4L2_BUF_FLAG_QUEUED;
     if (buf->state == BUF_DONE)
@@ -2416,11 +2444,24 @@ static int do_ioctl(struct handle *h, unsigned int cmd, void *arg)
     }
     case VIDIOC_QBUF: {
         struct v4l2_buffer *b = arg;
-        if (b->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || b->memory != V4L2_MEMORY_MMAP
+        if (b->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || b->memory != h->memory
                 || b->index >= h->n_buffers || !owns(h))
             return EINVAL;
         if (h->buffers[b->index].state != BUF_IDLE)
             return EINVAL;
+        if (h->memory == V4L2_MEMORY_USERPTR) {
+            /* As vb2: the memory must hold a whole image; another place than the last
+             * time holds none of the picture drawn there. */
+            struct buffer *buf = &h->buffers[b->index];
+            if (!b->m.userptr || b->length < cam->formats[h->fmt].frames[h->frame].sizeimage)
+                return EINVAL;
+            if (cam->no_userptr == 2)   /* memory the driver cannot use (not contiguous) */
+                return EFAULT;
+            if (buf->user != (uint8_t *)b->m.userptr)
+                buf->bg_frame = -1;
+            buf->user = (uint8_t *)b->m.userptr;
+            buf->user_length = b->length;
+        }
         h->buffers[b->index].state = BUF_QUEUED;
         h->queued[h->n_queued++] = b->index;
         fill_buffer(h, b->index, b);
@@ -2428,7 +2469,7 @@ static int do_ioctl(struct handle *h, unsigned int cmd, void *arg)
     }
     case VIDIOC_DQBUF: {
         struct v4l2_buffer *b = arg;
-        if (b->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || b->memory != V4L2_MEMORY_MMAP)
+        if (b->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || b->memory != h->memory)
             return EINVAL;
         if (h->dead || dead(h))
             return ENODEV;
