@@ -26,7 +26,8 @@ time publishes it to one best-effort subscriber, a bare rclpy node in its own pr
 own:
 
 - `py_vision bgr8` and `py_vision native`: the installed usbcam_publisher, output_encoding bgr8
-  and native (the camera's YUYV as yuv422_yuy2), with its own Fast DDS profile, as users run it;
+  and native (the camera's YUYV as yuv422_yuy2, which the camera writes into the published
+  messages themselves: V4L2 USERPTR), with its own Fast DDS profile, as users run it;
 - `v4l2_camera` 0.4.0 and `usb_cam` 0.4.1, the C++ drivers the boards' meta-ros has, from the
   boards' Humble (../shared/humble, set up by scripts/setup.sh --board), at their defaults for
   a YUYV camera (both publish rgb8, converted from YUYV), first with Fast DDS' defaults, then

@@ -18,8 +18,10 @@ The floor of a camera driver in Python: the least a loop does per frame, nothing
 Usage: camera_floor.py DEVICE WIDTH HEIGHT FPS OUTPUT (bgr8 or native: YUYV as yuv422_yuy2)
 A bare rclpy node with py_vision's Fast DDS profile (tailored as usbcam_publisher's) and one
 loop: wait for a V4L2 frame and take it (py_vision's V4L2Source: poll, VIDIOC_DQBUF and QBUF),
-convert it into the serialized Image (or copy it there), write the stamp, publish it, publish
-the CameraInfo with the same stamp (py_vision.serialized and serialized_publisher). No
+convert it into the serialized Image (native: the camera captured it into the message itself,
+V4L2 USERPTR, as the node does where the driver allows; else it is copied there), write the
+stamp, publish it, publish the CameraInfo with the same stamp (py_vision.serialized and
+serialized_publisher). No
 parameters, no executor, no checks, no statistics, no recovery: what usbcam_publisher costs
 above this is the node's own. Prints FIRST_FRAME_MARK once publishing and stops on
 SIGINT/SIGTERM.
@@ -55,6 +57,10 @@ def main():
     infos = SerializedPublisher(node.create_publisher(CameraInfo, 'usb_camera/camera_info', 10))
     source = V4L2Source(device)
     source.configure(FORMATS['YUYV'], width, height, fps)
+    messages = []
+    if output != 'bgr8':
+        messages = [SerializedImage(source.buffer_bytes) for _ in range(4)]
+        source.capture_into([message.pixels() for message in messages])
     source.start()
     header = Header(frame_id='usb_camera')
     info = CameraInfo(header=header, width=width, height=height)
@@ -66,16 +72,20 @@ def main():
     try:
         while not stop.is_set():
             frame = source.next_frame()
-            if frame is None or frame.data is None:
+            if frame is None or frame.data is None or frame.corrupt:
                 continue
-            view = frame.data.reshape(height, width, 2)
-            if channels == 3:
-                cv2.cvtColor(view, cv2.COLOR_YUV2BGR_YUYV, dst=out)
-            else:
-                out[...] = view
             header.stamp.sec, header.stamp.nanosec = divmod(time.time_ns(), 1000000000)
-            image.prepare(header, height, width, encoding, width * channels)
-            images.publish_at(*image.where())
+            if frame.user_buffer is not None:
+                message = messages[frame.user_buffer]
+            else:
+                message = image
+                view = frame.data.reshape(height, width, 2)
+                if channels == 3:
+                    cv2.cvtColor(view, cv2.COLOR_YUV2BGR_YUYV, dst=out)
+                else:
+                    out[...] = view
+            message.prepare(header, height, width, encoding, width * channels)
+            images.publish_at(*message.where())
             infos.publish_at(*info_bytes.stamp(info))
             if not announced:
                 announce_first_frame()

@@ -115,7 +115,9 @@ class _PixelsInPlace(_Buffer):
 
     def __init__(self, capacity: int):
         super().__init__()
-        self._memory = np.zeros(HEAD_ROOM + capacity + _PAGE, np.uint8)
+        # Whole pages: no other data shares the pages a device writes the pixels into.
+        pages = -(-capacity // _PAGE) * _PAGE
+        self._memory = np.zeros(HEAD_ROOM + pages + _PAGE, np.uint8)
         base = self._memory.ctypes.data
         self._pixels_at = HEAD_ROOM + (-(base + HEAD_ROOM) % _PAGE)
         self.pixels = self._memory[self._pixels_at:self._pixels_at + capacity]

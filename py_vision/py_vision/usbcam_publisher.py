@@ -327,8 +327,7 @@ class USBImagePublisher(LifecycleNodeMixin, Node):
         camera = Camera.open(self.video_device, self.size[0], self.size[1], self.framerate,
                              self.pixel_format, self.output_encoding,
                              synthetic=self._synthetic)
-        if self.output_encoding == 'native' and camera.buffer_bytes and \
-                not camera.pixel_format.compressed:
+        if self.output_encoding == 'native' and camera.buffer_bytes and camera.sends_messages:
             # The camera writes its frames into the raw messages themselves: published as
             # they come, never copied here (a driver without user memory: its own buffers).
             buffers = self.images.frame_buffers(camera.buffer_count, camera.buffer_bytes)

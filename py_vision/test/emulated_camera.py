@@ -336,6 +336,9 @@ class EmulatedCamera:
                                                 'usb_controller', 'no_userptr'}
         if unknown:
             raise TypeError('unknown option(s) %s' % ', '.join(sorted(unknown)))
+        if faults.get('no_userptr') not in (None, False, True, 'reqbufs', 'qbuf'):
+            raise TypeError("no_userptr is True, 'reqbufs' or 'qbuf', not %r"
+                            % (faults['no_userptr'],))
         self.model = load_model(model)
         self.library = build_library()
         self.dir = Path(tempfile.mkdtemp(prefix='%s-' % self.model['model'], dir=str(state_dir)))

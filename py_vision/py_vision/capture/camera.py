@@ -247,6 +247,19 @@ class Camera:
         return self.source.buffer_bytes if isinstance(self.source, V4L2Source) else 0
 
     @property
+    def sends_messages(self) -> bool:
+        """
+        Return True when native frames are a message's pixels as they are.
+
+        A raw format with a sensor_msgs encoding whose rows have no padding: its bytes are
+        the Image's data, with nothing converted or left out.
+        """
+        pixel_format, stream = self.pixel_format, self.stream
+        return (pixel_format is not None and not pixel_format.compressed
+                and pixel_format.encoding is not None
+                and stream.bytesperline in (0, pixel_format.bytesperline(self.width)))
+
+    @property
     def io_method(self) -> str:
         """Return how frames reach the program: 'mmap', 'userptr' (V4L2) or '' (others)."""
         if not isinstance(self.source, V4L2Source):

@@ -205,7 +205,7 @@ class CaptureLoop:
                 camera, self._camera = self._camera, None
             if camera is not None:
                 camera.release()
-            self._update(present=False)
+            self._update(present=False, io_method='')
         return ended
 
     def set_controls(self, values: Mapping[int, int], keep: bool = True) -> Dict[int, Refusal]:
@@ -257,7 +257,7 @@ class CaptureLoop:
         """Take camera as the current one (lock held): apply the wanted controls to it."""
         self._camera = camera
         if camera is None:
-            self._update(present=False)
+            self._update(present=False, io_method='')
             return
         refused = camera.set_controls(self._wanted)
         if refused:

@@ -117,6 +117,9 @@ _BUFFER_M_AT = struct.calcsize('@5Ill2I8B2I0L')
 _BUFFERS = [_buffer_for(index) for index in range(32)]   # VIDEO_MAX_FRAME buffers at most
 _STREAM_TYPE = struct.pack('=I', BUF_TYPE_VIDEO_CAPTURE)
 
+# What a driver that cannot use the user memory it is given answers QBUF (an unplugged or
+# taken device answers otherwise: that is said as it is).
+_USER_MEMORY_REFUSED = (errno.EINVAL, errno.EFAULT, errno.ENOMEM)
 # Why a stream does not start, by errno, where open_problem's words would not tell a user.
 STREAM_PROBLEMS = {
     errno.ENOMEM: 'the driver has no memory for the buffers',
@@ -261,7 +264,7 @@ class V4L2Source:
                 for index in range(len(self._arrays)):
                     self._queue(index)
             except OSError as error:
-                if self.memory != MEMORY_USERPTR:
+                if self.memory != MEMORY_USERPTR or error.errno not in _USER_MEMORY_REFUSED:
                     raise _stream_error('VIDIOC_QBUF', error) from None
                 # A driver that takes no user memory after all (its buffers must be
                 # physically contiguous, say): its own mapped buffers then.
@@ -431,8 +434,9 @@ class V4L2Source:
             self._polled = False
         if not self._arrays:
             return
-        # The driver lets go of user memory first: the arrays may go after that.
-        self._give_back(self.memory)
+        memory = self.memory
+        if memory == MEMORY_USERPTR:
+            self._give_back(memory)   # the driver lets go of user memory before the arrays go
         self._arrays = []
         for mapped in self._maps:
             try:
@@ -440,6 +444,9 @@ class V4L2Source:
             except BufferError:
                 pass   # a frame still holds a view: unmapped when it goes
         self._maps = []
+        if memory != MEMORY_USERPTR:
+            # Unmapped first: a kernel before 5.0 refuses to free mapped buffers (EBUSY).
+            self._give_back(memory)
 
     def _give_back(self, memory: int) -> None:
         """Free the driver's buffers (REQBUFS with a count of 0)."""

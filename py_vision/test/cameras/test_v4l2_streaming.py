@@ -118,6 +118,8 @@ assert camera.capture_into(arrays)
 camera.start()
 for _ in range(6):
     frame = camera.read()
+    while frame is None:   # a read that timed out on a loaded machine
+        frame = camera.read()
     inside = [i for i, a in enumerate(arrays) if np.shares_memory(a, frame.data)]
     print(json.dumps({'user_buffer': frame.user_buffer, 'inside': inside,
                       'index': read_frame_index(frame.image('bgr8')),

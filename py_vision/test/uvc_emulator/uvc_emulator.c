@@ -2458,7 +2458,7 @@ static int do_ioctl(struct handle *h, unsigned int cmd, void *arg)
             if (cam->no_userptr == 2)   /* memory the driver cannot use (not contiguous) */
                 return EFAULT;
             if (buf->user != (uint8_t *)b->m.userptr)
-                buf->bg_frame = -1;
+                buf->bg_frame = -1;   /* (the program is trusted not to write into it) */
             buf->user = (uint8_t *)b->m.userptr;
             buf->user_length = b->length;
         }
