@@ -315,3 +315,17 @@ def test_a_device_of_digits_that_are_no_number_is_one_clear_error(device):
         _Camera.open(device, 160, 120, 10.0)
     with pytest.raises(SourceError, match='cannot open video_device'):
         device_listing(device)
+
+
+@pytest.mark.parametrize('fourcc,sends', [
+    ('yuyv', True), ('uyvy', True), ('grey', True), ('nv21', True), ('ba81', True),
+    ('nv12', False),    # no sensor_msgs encoding: native is converted
+    ('yu12', False), ('y10', False), ('mjpg', False)])
+def test_native_frames_are_a_messages_bytes_only_for_a_raw_format_with_an_encoding(
+        fourcc, sends):
+    # Only then may the camera capture them into the published messages (USERPTR).
+    camera = Camera.open('synthetic?formats=%s' % fourcc, 320, 240, 15.0, fourcc, 'native')
+    try:
+        assert camera.sends_messages is sends
+    finally:
+        camera.release()
