@@ -25,6 +25,7 @@ written into the message, they reach a subscriber as the Image the bridge makes 
 """
 
 import ctypes
+import threading
 import time
 from types import SimpleNamespace
 
@@ -312,6 +313,47 @@ def test_frames_captured_into_the_publishers_messages_go_out_as_they_are(node):
                               'yuv422_yuy2', None, into, captured.user_buffer) == (True, False)
     assert receive(node, 'in_place', 6, publish) == sent
     assert copies == [5], 'only the frame outside the messages was copied'
+
+
+def test_frames_published_from_two_threads_at_once_each_go_out_whole(node):
+    """One buffer, one frame at a time: a frame's stamp never goes out with another's pixels."""
+    # (A camera's old video decoder thread, ending, while the next one starts publishing.)
+    images = ImagePublisher(Parameters(node), 'two_threads', RELIABLE, CvBridge())
+    got = []
+    subscription = node.create_subscription(Image, 'two_threads', got.append, RELIABLE)
+    ros_harness.wait_until(lambda: node.count_subscribers('two_threads') > 0, 10,
+                           what='the subscription matched')
+    yuyv = FORMATS['YUYV']
+
+    def publish(first):
+        for index in range(first, first + 200, 2):
+            # A grey of its own per frame: YUYV (Y, 128, Y, 128), converted while the GIL
+            # is released (OpenCV), as a camera's frame is.
+            data = np.tile(np.array([40 + index % 150, 128], np.uint8), 640 * 480)
+            frame = Frame(index, None, yuyv, 640, 480, data)
+            images.publish(header('cam', index), lambda: frame.image('bgr8'), None, 'bgr8',
+                           None, lambda out: frame.image('bgr8', out))
+    threads = [threading.Thread(target=publish, args=(first,)) for first in (0, 1)]
+    try:
+        for thread in threads:
+            thread.start()
+        deadline = time.monotonic() + 30
+        while any(t.is_alive() for t in threads) and time.monotonic() < deadline:
+            node.test_executor.spin_once(timeout_sec=0.01)
+        for _ in range(50):
+            node.test_executor.spin_once(timeout_sec=0.01)
+    finally:
+        for thread in threads:
+            thread.join(30)
+        node.destroy_subscription(subscription)
+    assert len(got) >= 20, 'only %d frames came' % len(got)
+    for msg in got:
+        pixels = np.frombuffer(msg.data, np.uint8)
+        luma = 40 + msg.header.stamp.sec % 150
+        grey = yuyv.convert(np.array([[[luma, 128], [luma, 128]]], np.uint8), 'bgr8')[0, 0, 0]
+        assert pixels.min() == pixels.max() == grey, \
+            'frame %d went out with other pixels (%d to %d)' % (
+                msg.header.stamp.sec, pixels.min(), pixels.max())
 
 
 def test_image_publisher_copies_pixels_it_cannot_convert_into(node):

@@ -133,3 +133,26 @@ def test_closing_a_decoder_that_never_got_a_frame_returns_at_once(decoders):
     decoder = VideoDecoder('h264', lambda picture, tag: None)
     decoder.close(timeout=TIMEOUT)
     assert not any(thread.is_alive() for thread in decoder._threads)
+
+
+def test_no_picture_is_handed_out_after_close_returns(decoders):
+    # The reader thread busy with a picture while close() gives up waiting for it: the
+    # pictures it reads afterwards (already in the pipe) go nowhere, as close() promises.
+    pictures, closed, late = Pictures(), threading.Event(), []
+
+    def on_picture(picture, tag):
+        if closed.is_set():
+            late.append(tag)
+        pictures(picture, tag)
+    decoder = decoders('h264', on_picture, max_queue=FRAMES + 1)
+    units = access_units()
+    pictures.hold.clear()            # the first picture waits in on_picture
+    for index, unit in enumerate(units):
+        decoder.decode(unit, tag=index)
+    assert pictures.started.wait(TIMEOUT), 'no picture came'
+    decoder.close(timeout=0.5)       # returns with the reader still inside on_picture
+    closed.set()
+    pictures.hold.set()
+    wait_until(lambda: not any(t.is_alive() for t in decoder._threads), TIMEOUT,
+               what="the decoder's threads ended")
+    assert late == [], 'pictures handed out after close(): %s' % late
