@@ -30,7 +30,7 @@ import errno
 import os
 import re
 
-from lifecycle_client import Lifecycle
+from lifecycle_client import CameraStatus, Lifecycle
 from lifecycle_msgs.msg import Transition
 from listing_text import control_line, formats
 import numpy as np
@@ -164,9 +164,13 @@ def stream_as(vm, pixel_format, outputs):
     bridge, got = CvBridge(), {}
     for output in outputs:
         frames = vm.peer.collect(Image, 'usb_camera/image')
+        status = CameraStatus(vm.peer)
         node = vm.launch(NODE, params=dict(STREAM, **COLOUR_BARS, video_device=vm.device,
                                            pixel_format=pixel_format, output_encoding=output))
         wait_until(lambda: len(frames) >= 3, 120, what='3 frames')
+        wait_until(lambda: status.latest()[1].get('io method'), 60,
+                   what='a report saying how frames reach the node')
+        got[output + ' io method'] = status.latest()[1]['io method']
         node.end(timeout=60)   # Ctrl-C, the VM's CPU being slow: the device free again
         got[output] = [(msg.encoding, msg.step, len(msg.data),
                         bridge.imgmsg_to_cv2(msg, 'bgr8')) for msg in list(frames)[-2:]]
@@ -186,6 +190,11 @@ def test_every_raw_format_streams_right_as_native_and_as_bgr8(vivid, fourcc):
     for output, encoding in (('native', native), ('bgr8', 'bgr8')):
         log = got[output + ' log']
         assert 'opened %s: 320x180 %s at' % ('/dev/video0', fourcc) in log, log
+        # The kernel's vb2 takes user memory: native frames the camera wrote into the
+        # messages themselves; converted ones (NV12, bgr8) come from the driver's buffers.
+        assert got[output + ' io method'] == (
+            'userptr' if output == 'native' and native != 'bgr8' else 'mmap'), \
+            (output, got[output + ' io method'])
         for published, step, size, image in got[output]:
             assert published == encoding, (output, published)
             if output == 'native':   # the camera's bytes, in its own layout
