@@ -197,8 +197,7 @@ class ImagePublisher:
 
     def _publish_raw(self, header, image, encoding, into, in_buffer=None) -> bool:
         """Publish the raw image; False when it is not a whole image (nothing published)."""
-        if in_buffer is not None and self._serialized.available and \
-                self._publish_in_place(header, image, encoding, in_buffer):
+        if in_buffer is not None and self._publish_in_place(header, image, encoding, in_buffer):
             return True
         if not self._serialized.available:
             pixels = image()

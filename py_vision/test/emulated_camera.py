@@ -84,6 +84,8 @@ _TYPES = {'integer': 1, 'boolean': 2, 'menu': 3, 'button': 4, 'integer64': 5, 's
 _ELEM_SIZES = {'integer64': 8, 'u8': 1, 'u16': 2, 'area': 8}
 _FLAG_READ_ONLY = 0x4
 _FAULTS = ('stalled', 'denied')
+# no_userptr's values, as the data file gives them (uvc_emulator.c: 1 REQBUFS refuses, 2 QBUF).
+_NO_USERPTR = {None: 0, False: 0, True: 1, 'reqbufs': 1, 'qbuf': 2}
 
 
 def jpeg_digest(data):
@@ -336,7 +338,7 @@ class EmulatedCamera:
                                                 'usb_controller', 'no_userptr'}
         if unknown:
             raise TypeError('unknown option(s) %s' % ', '.join(sorted(unknown)))
-        if faults.get('no_userptr') not in (None, False, True, 'reqbufs', 'qbuf'):
+        if faults.get('no_userptr') not in _NO_USERPTR:
             raise TypeError("no_userptr is True, 'reqbufs' or 'qbuf', not %r"
                             % (faults['no_userptr'],))
         self.model = load_model(model)
@@ -382,8 +384,7 @@ class EmulatedCamera:
                  'drop_every %d' % int(faults.get('drop_every', 0)),
                  'error_every %d' % int(faults.get('error_every', 0)),
                  'streamon_errno %d' % int(faults.get('streamon_errno', 0)),
-                 'no_userptr %d' % {None: 0, False: 0, True: 1, 'reqbufs': 1, 'qbuf': 2}[
-                     faults.get('no_userptr')]]
+                 'no_userptr %d' % _NO_USERPTR[faults.get('no_userptr')]]
         if self.bus is not None:
             lines += ['bus %d %d %s' % (self.bus_key, m.get('usb_compressed_payload',
                                                             _USB_COMPRESSED_PAYLOAD), self.bus),

@@ -40,11 +40,14 @@ from py_vision.capture.pixel_formats import COLOUR_OUTPUTS, find, FORMATS, Pixel
 from py_vision.capture.source import (
     BusFull, Clock, Frame, FrameFormat, FrameSource, MONOTONIC, SourceError, StreamFormat)
 from py_vision.capture.synthetic_device import SyntheticDevices
-from py_vision.capture.v4l2 import MEMORY_USERPTR, V4L2Error
+from py_vision.capture.v4l2 import MEMORY_MMAP, MEMORY_USERPTR, V4L2Error
 from py_vision.capture.v4l2_stream import BUFFERS, V4L2Source
 from py_vision.capture.video_file import video_file_support, VideoFileSource
 
 __all__ = ['Camera', 'open_source', 'pixel_format_accepted']
+
+# V4L2's memory types in usb_cam's words for them (its io_method).
+_IO_METHODS = {MEMORY_MMAP: 'mmap', MEMORY_USERPTR: 'userptr'}
 
 # Rates within this fraction of the request count as reached (drivers report 29.97 for 30).
 _RATE_TOLERANCE = 0.02
@@ -261,10 +264,10 @@ class Camera:
 
     @property
     def io_method(self) -> str:
-        """Return how frames reach the program: 'mmap', 'userptr' (V4L2) or '' (others)."""
+        """Return how frames reach the program: 'mmap', 'userptr' or '' (no V4L2 buffers)."""
         if not isinstance(self.source, V4L2Source):
             return ''
-        return 'userptr' if self.source.memory == MEMORY_USERPTR else 'mmap'
+        return _IO_METHODS.get(self.source.memory, '')
 
     @property
     def buffer_count(self) -> int:

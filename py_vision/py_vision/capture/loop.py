@@ -156,7 +156,6 @@ class CaptureLoop:
                 self._set_camera(self._open_camera())
             try:
                 self._camera.start()
-                self._update(io_method=self._camera.io_method)
             except BusFull as error:
                 # Not an error of the configuration: the capture thread waits for room.
                 self._log.warning(str(error))
@@ -205,7 +204,7 @@ class CaptureLoop:
                 camera, self._camera = self._camera, None
             if camera is not None:
                 camera.release()
-            self._update(present=False, io_method='')
+            self._update(present=False)
         return ended
 
     def set_controls(self, values: Mapping[int, int], keep: bool = True) -> Dict[int, Refusal]:
@@ -242,9 +241,11 @@ class CaptureLoop:
 
     def stats(self) -> CaptureStats:
         """Return the counters so far (a snapshot)."""
+        camera = self._camera
         return replace(self._stats, frames=self._frames, stale=self._stale,
                        corrupt=self._corrupt, errors=self._errors, dropped=self._dropped,
-                       measured_fps=self._rate)
+                       measured_fps=self._rate,
+                       io_method=camera.io_method if camera is not None else '')
 
     @property
     def running(self) -> bool:
@@ -257,7 +258,7 @@ class CaptureLoop:
         """Take camera as the current one (lock held): apply the wanted controls to it."""
         self._camera = camera
         if camera is None:
-            self._update(present=False, io_method='')
+            self._update(present=False)
             return
         refused = camera.set_controls(self._wanted)
         if refused:
@@ -384,7 +385,6 @@ class CaptureLoop:
             try:
                 with self._lock:
                     camera.start()
-                self._update(io_method=camera.io_method)
             except BusFull as error:
                 now = self._clock.now()
                 if now - last_log >= self._timing.log_period_s:
@@ -422,7 +422,6 @@ class CaptureLoop:
                     self._set_camera(camera)
                     try:
                         camera.start()
-                        self._update(io_method=camera.io_method)
                     except BusFull as error:
                         self._log.warning(str(error))   # _wait_for_room goes on from here
                         self._update(waiting=str(error))

@@ -151,7 +151,7 @@ class V4L2Source:
         self._maps: List[mmap.mmap] = []
         self._arrays: List[np.ndarray] = []     # each buffer's bytes, made once
         self._user: Optional[List[np.ndarray]] = None   # capture_into()'s memory
-        self.memory = MEMORY_MMAP               # how the buffers there are: mmap or user
+        self.memory: Optional[int] = None       # the buffers': MEMORY_MMAP, _USERPTR, or none
         self._queue_as: List[bytes] = _BUFFERS  # each buffer's struct v4l2_buffer for QBUF
         self._dequeue_as = _BUFFERS[0]
         self._held: Optional[int] = None        # the buffer the last frame's bytes are in
@@ -252,32 +252,16 @@ class V4L2Source:
             return
         if not self._arrays:
             self._map_buffers(user=self._user is not None)
+        # After a STREAMON that failed (no room on the USB bus) the driver keeps the buffers
+        # queued: queued again, they would be refused.
+        if not self._queued:
+            self._queue_all()
+            self._queued = True
         if not self._polled:
             # Polled only once it has buffers: polling a queue without any starts the read()
             # emulation of a driver that has read I/O (vivid), which takes the queue.
             self._poll.register(self._fd, select.EPOLLIN)
             self._polled = True
-        # After a STREAMON that failed (no room on the USB bus) the driver keeps the buffers
-        # queued: queued again, they would be refused.
-        if not self._queued:
-            try:
-                for index in range(len(self._arrays)):
-                    self._queue(index)
-            except OSError as error:
-                if self.memory != MEMORY_USERPTR or error.errno not in _USER_MEMORY_REFUSED:
-                    raise _stream_error('VIDIOC_QBUF', error) from None
-                # A driver that takes no user memory after all (its buffers must be
-                # physically contiguous, say): its own mapped buffers then.
-                self._free_buffers()
-                self._map_buffers(user=False)
-                self._poll.register(self._fd, select.EPOLLIN)
-                self._polled = True
-                try:
-                    for index in range(len(self._arrays)):
-                        self._queue(index)
-                except OSError as error:
-                    raise _stream_error('VIDIOC_QBUF', error) from None
-            self._queued = True
         try:
             fcntl.ioctl(self._fd, VIDIOC_STREAMON, _STREAM_TYPE)
         except OSError as error:
@@ -331,6 +315,20 @@ class V4L2Source:
                           for index, array in enumerate(self._arrays)]
         self._dequeue_as = self._queue_as[0]
         return True
+
+    def _queue_all(self) -> None:
+        """Give every buffer to the driver; V4L2Error if it refuses them."""
+        try:
+            for index in range(len(self._arrays)):
+                self._queue(index)
+        except OSError as error:
+            if self.memory != MEMORY_USERPTR or error.errno not in _USER_MEMORY_REFUSED:
+                raise _stream_error('VIDIOC_QBUF', error) from None
+            # A driver that takes no user memory after all (its buffers must be physically
+            # contiguous, say): its own mapped buffers then.
+            self._free_buffers()
+            self._map_buffers(user=False)
+            self._queue_all()
 
     def _queue(self, index: int) -> None:
         fcntl.ioctl(self._fd, VIDIOC_QBUF, bytearray(self._queue_as[index]))
@@ -447,6 +445,7 @@ class V4L2Source:
         if memory != MEMORY_USERPTR:
             # Unmapped first: a kernel before 5.0 refuses to free mapped buffers (EBUSY).
             self._give_back(memory)
+        self.memory = None
 
     def _give_back(self, memory: int) -> None:
         """Free the driver's buffers (REQBUFS with a count of 0)."""

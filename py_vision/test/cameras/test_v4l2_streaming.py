@@ -115,7 +115,9 @@ from py_vision.capture.synthetic_picture import read_frame_index
 camera = Camera.open(sys.argv[1], 320, 240, 30.0, 'yuyv', 'native')
 arrays = [np.zeros(camera.buffer_bytes, np.uint8) for _ in range(camera.buffer_count)]
 assert camera.capture_into(arrays)
+methods = [camera.io_method]
 camera.start()
+methods.append(camera.io_method)
 for _ in range(6):
     frame = camera.read()
     while frame is None:   # a read that timed out on a loaded machine
@@ -125,6 +127,7 @@ for _ in range(6):
                       'index': read_frame_index(frame.image('bgr8')),
                       'sent': frame.data.tobytes().hex()}), flush=True)
 camera.release()
+print(json.dumps({'io methods': methods + [camera.io_method]}))
 """
 
 
@@ -140,6 +143,8 @@ def test_frames_are_captured_into_memory_the_program_gives(emulated_camera, no_u
                             timeout=120)
     assert result.returncode == 0, result.stderr[-3000:]
     frames = [json.loads(line) for line in result.stdout.splitlines()]
+    # What /diagnostics says: no buffers before start() and after release(), then which.
+    assert frames.pop()['io methods'] == ['', 'mmap' if no_userptr else 'userptr', '']
     assert len(frames) == 6
     for frame in frames:
         assert frame['index'] is not None
